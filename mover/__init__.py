@@ -1,0 +1,60 @@
+"""mover: program a team of mobile robots as one distributed program.
+
+The public face of the middleware: a :class:`Node` per process (RPC, range-limited broadcasts,
+liveliness and team membership over Eclipse Zenoh), the :class:`Team` and its key, and the
+errors. Everything else lives in private modules.
+"""
+
+from ._config import NodeConfig, Team, free_port
+from ._exceptions import (
+    BadArguments,
+    CallError,
+    CallTimeout,
+    MemberLost,
+    MoverError,
+    NodeClosed,
+    PayloadTooLarge,
+    Refused,
+    RemoteError,
+    RobotLost,
+    UnknownProcedure,
+    UnknownRobot,
+    WireError,
+)
+from ._membership import MemberEvent, MemberInfo, Membership
+from ._node import Node
+from ._radio import FixedLocator, Locator, Message, Neighbour, RadioModel, Subscription
+from ._rpc import procedure
+from ._wire import pack, unpack
+
+__all__ = [
+    "BadArguments",
+    "CallError",
+    "CallTimeout",
+    "FixedLocator",
+    "Locator",
+    "MemberEvent",
+    "MemberInfo",
+    "MemberLost",
+    "Membership",
+    "Message",
+    "MoverError",
+    "Neighbour",
+    "Node",
+    "NodeClosed",
+    "NodeConfig",
+    "PayloadTooLarge",
+    "RadioModel",
+    "Refused",
+    "RemoteError",
+    "RobotLost",
+    "Subscription",
+    "Team",
+    "UnknownProcedure",
+    "UnknownRobot",
+    "WireError",
+    "free_port",
+    "pack",
+    "procedure",
+    "unpack",
+]

@@ -1,0 +1,56 @@
+"""The `mover` command's frame.
+
+Verbs are gathered from the ``mover.commands`` entry-point group, as the ``ros2`` command gathers
+its verbs, so that this package imports none of the packages that provide them. Each entry point
+is a ``register(subparsers)`` function that adds one sub-parser and sets ``func`` — a callable
+taking the parsed arguments and returning an exit code.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+from collections.abc import Sequence
+from importlib.metadata import entry_points
+
+log = logging.getLogger("mover.cli")
+
+
+class UsageError(Exception):
+    """A command-line mistake: printed as one line, exit code 2."""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The full parser, with every verb that loads."""
+    parser = argparse.ArgumentParser(
+        prog="mover", description="Program a team of mobile robots as one distributed program."
+    )
+    parser.add_argument("-v", "--verbose", action="count", default=0, help="more log lines")
+    sub = parser.add_subparsers(dest="verb", metavar="VERB", required=True)
+    for ep in sorted(entry_points(group="mover.commands"), key=lambda e: e.name):
+        try:
+            ep.load()(sub)
+        except Exception as exc:  # one broken verb must not take the others down
+            log.debug("verb %r is unavailable: %s", ep.name, exc)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``mover`` console script."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    level = logging.WARNING - 10 * min(args.verbose, 2)
+    logging.basicConfig(level=level, format="%(asctime)s %(name)s %(levelname)s %(message)s")
+    try:
+        code = args.func(args)
+    except UsageError as exc:
+        print(f"mover {args.verb}: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        return 130
+    return int(code or 0)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,98 @@
+"""The errors mover raises, as one tree.
+
+::
+
+    MoverError
+    ├── WireError                  a frame that does not decode, or a value that cannot be sent
+    │   └── PayloadTooLarge        over the node's size limit
+    ├── CallError                  a remote call failed (has .robot and .procedure)
+    │   ├── RemoteError            the procedure raised; .remote_type and .message say what
+    │   ├── UnknownProcedure       the robot exports no procedure of that name
+    │   ├── BadArguments           the arguments do not fit the procedure's signature or hints
+    │   ├── CallTimeout            no answer within the timeout (also a TimeoutError)
+    │   ├── RobotLost              the callee left the team (died, hung, cut off) mid-call
+    │   ├── UnknownRobot           no team member of that name answers
+    │   └── Refused                the callee refused the request (authentication, replay)
+    ├── MemberLost                 a member of a collective step left before it finished
+    └── NodeClosed                 the node was closed while the operation was pending
+
+Errors cross processes as data (type name and message), never as pickled objects.
+"""
+
+from __future__ import annotations
+
+
+class MoverError(Exception):
+    """Base of every error mover raises."""
+
+
+class WireError(MoverError):
+    """A frame that does not decode, or a value that cannot be encoded."""
+
+
+class PayloadTooLarge(WireError):
+    """An envelope is over the size limit."""
+
+
+class NodeClosed(MoverError):
+    """The node was closed while an operation was pending."""
+
+
+class CallError(MoverError):
+    """A remote call failed; ``robot`` and ``procedure`` say which."""
+
+    def __init__(self, message: str, *, robot: str = "", procedure: str = "") -> None:
+        super().__init__(message)
+        self.robot = robot
+        self.procedure = procedure
+
+
+class RemoteError(CallError):
+    """The remote procedure raised ``remote_type`` with ``message``."""
+
+    def __init__(self, remote_type: str, message: str, *, robot: str, procedure: str) -> None:
+        super().__init__(
+            f"{procedure!r} on {robot!r} raised {remote_type}: {message}",
+            robot=robot,
+            procedure=procedure,
+        )
+        self.remote_type = remote_type
+        self.message = message
+
+
+class UnknownProcedure(CallError):
+    """The robot does not export a procedure of that name."""
+
+
+class BadArguments(CallError):
+    """The arguments do not fit the procedure's signature or type hints."""
+
+
+class CallTimeout(CallError, TimeoutError):
+    """No answer came within the call's timeout."""
+
+
+class RobotLost(CallError):
+    """The callee left the team (process died, hung or was cut off) before answering."""
+
+
+class UnknownRobot(CallError):
+    """No member of the team by that name answers."""
+
+
+class Refused(CallError):
+    """The callee refused the request: bad signature, other team, stale or replayed."""
+
+
+class MemberLost(MoverError):
+    """A member of a collective step left the team before the step finished."""
+
+    def __init__(self, message: str, *, members: frozenset[str] = frozenset()) -> None:
+        super().__init__(message)
+        self.members = members
+
+
+# Errors a callee may report by name; anything else arrives as RemoteError.
+CALL_ERRORS: dict[str, type[CallError]] = {
+    cls.__name__: cls for cls in (UnknownProcedure, BadArguments, Refused)
+}

@@ -1,0 +1,208 @@
+"""Team membership: who is alive, verified by a signed hello, with join and leave events.
+
+Every node holds a liveliness token ``mover/<team>/alive/<name>``. A token alone proves nothing
+(anyone on the network can declare one), so when a token appears the node asks its holder for a
+hello signed with the team key and carrying a fresh challenge; only then is it a member. A token
+that goes away (the process exited, was SIGKILLed — seen within milliseconds — or hung past its
+one-second lease) makes the member leave.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import os
+import time
+from collections.abc import AsyncIterator, Callable, Iterable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import zenoh
+
+from . import _keys
+from ._exceptions import WireError
+
+if TYPE_CHECKING:
+    from ._node import Node
+
+log = logging.getLogger("mover.team")
+
+
+@dataclass(frozen=True)
+class MemberInfo:
+    """What a member says of itself in its hello."""
+
+    name: str
+    kind: str
+    started: float  # Unix time the member's node opened
+    pid: int
+    host: str
+
+    @property
+    def uptime(self) -> float:
+        """Seconds since the member's node opened."""
+        return max(0.0, time.time() - self.started)
+
+
+@dataclass(frozen=True)
+class MemberEvent:
+    """A member joined or left."""
+
+    kind: str  # "join" or "leave"
+    name: str
+    info: MemberInfo | None
+
+
+class Membership:
+    """The live view of a team's members, as seen by one node."""
+
+    def __init__(self, node: Node) -> None:
+        self._node = node
+        self._members: dict[str, MemberInfo] = {}
+        self._tokens: set[str] = set()
+        self._listeners: list[asyncio.Queue[MemberEvent]] = []
+        self._on_leave: list[Callable[[str], None]] = []
+        self._changed = asyncio.Event()
+
+    # -- the public view ------------------------------------------------------------------------
+
+    def members(self) -> frozenset[str]:
+        """The names of the verified members now alive (this node included)."""
+        return frozenset(self._members)
+
+    def info(self, name: str) -> MemberInfo | None:
+        """What member ``name`` said of itself, or None if it is not a member."""
+        return self._members.get(name)
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._members
+
+    async def events(self) -> AsyncIterator[MemberEvent]:
+        """Join and leave events from now on (an async iterator)."""
+        queue: asyncio.Queue[MemberEvent] = asyncio.Queue()
+        self._listeners.append(queue)
+        try:
+            while True:
+                yield await queue.get()
+        finally:
+            self._listeners.remove(queue)
+
+    async def wait_for(self, names: Iterable[str], timeout: float = 10.0) -> None:
+        """Wait until every one of ``names`` is a member; TimeoutError after ``timeout``."""
+        wanted = set(names)
+        async with asyncio.timeout(timeout):
+            while not wanted <= self._members.keys():
+                await self._wait_change()
+
+    async def wait_gone(self, name: str, timeout: float = 10.0) -> None:
+        """Wait until ``name`` is no longer a member; TimeoutError after ``timeout``."""
+        async with asyncio.timeout(timeout):
+            while name in self._members:
+                await self._wait_change()
+
+    async def wait_size(self, n: int, timeout: float = 10.0) -> None:
+        """Wait until the team has at least ``n`` members; TimeoutError after ``timeout``."""
+        async with asyncio.timeout(timeout):
+            while len(self._members) < n:
+                await self._wait_change()
+
+    def on_leave(self, callback: Callable[[str], None]) -> None:
+        """Call ``callback(name)`` on the loop whenever a member leaves."""
+        self._on_leave.append(callback)
+
+    # -- driven by the node ---------------------------------------------------------------------
+
+    async def _wait_change(self) -> None:
+        self._changed.clear()
+        await self._changed.wait()
+
+    def _join(self, info: MemberInfo) -> None:
+        fresh = info.name not in self._members
+        self._members[info.name] = info
+        if fresh:
+            log.info("%s: %s joined (%s)", self._node.name, info.name, info.kind)
+            self._emit(MemberEvent("join", info.name, info))
+
+    def _leave(self, name: str) -> None:
+        info = self._members.pop(name, None)
+        if info is None:
+            return
+        log.info("%s: %s left", self._node.name, name)
+        self._emit(MemberEvent("leave", name, info))
+        for callback in list(self._on_leave):
+            try:
+                callback(name)
+            except Exception:
+                log.exception("leave callback failed")
+
+    def _emit(self, event: MemberEvent) -> None:
+        self._changed.set()
+        for queue in self._listeners:
+            queue.put_nowait(event)
+
+    def self_info(self) -> MemberInfo:
+        node = self._node
+        return MemberInfo(node.name, node.kind, node.started, os.getpid(), os.uname().nodename)
+
+    def on_token(self, sample: Any) -> None:
+        """A liveliness token appeared or went away (runs on the loop)."""
+        key = str(sample.key_expr)
+        name = _keys.robot_of(key)
+        if sample.kind == zenoh.SampleKind.DELETE:
+            self._tokens.discard(name)
+            self._leave(name)
+            return
+        self._tokens.add(name)
+        if name == self._node.name:
+            if not self._node.observer:
+                self._join(self.self_info())
+            return
+        self._ask_hello(name)
+
+    def _ask_hello(self, name: str) -> None:
+        node = self._node
+        challenge = os.urandom(16)
+        state: dict[str, Any] = {"ok": False}
+
+        def on_reply(reply: Any) -> None:
+            if reply.ok is None:
+                return
+            try:
+                env = node._opener.open(reply.ok.payload.to_bytes())
+                p = env.payload
+                if env.kind != "hello" or env.sender != name or p.get("challenge") != challenge:
+                    raise WireError("hello does not answer our challenge")
+                info = MemberInfo(name, str(p["kind"]), float(p["started"]), int(p["pid"]),
+                                  str(p["host"]))
+            except (WireError, AttributeError, KeyError, TypeError, ValueError) as exc:
+                node._refusal_log.warn(name, f"hello from {name!r} refused: {exc}")
+                return
+            state["ok"] = True
+            if name in self._tokens:
+                self._join(info)
+
+        def on_done(_: Any) -> None:
+            if not state["ok"] and name in self._tokens:
+                log.warning("%s: %r holds a liveliness token but is not a verified member "
+                            "of team %r", node.name, name, node.team_name)
+
+        node._session.get(
+            _keys.hello(node.team_name, name),
+            node._portal.callback(on_reply, on_done),
+            payload=challenge,
+            consolidation=zenoh.ConsolidationMode.NONE,
+            timeout=5.0,
+        )
+
+    def on_hello_query(self, query: Any) -> None:
+        """Answer a hello request with a signed hello (runs on the loop)."""
+        node = self._node
+        with query:
+            challenge = query.payload.to_bytes()[:32] if query.payload is not None else b""
+            info = self.self_info()
+            frame = node._sealer.seal(
+                "hello",
+                {"challenge": challenge, "kind": info.kind, "started": info.started,
+                 "pid": info.pid, "host": info.host},
+            )
+            query.reply(_keys.hello(node.team_name, node.name), frame)

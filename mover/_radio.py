@@ -1,0 +1,192 @@
+"""Range-limited publish/subscribe, and the neighbour table it feeds.
+
+A broadcast carries the sender's position at send time (from its locator) and the range. Each
+receiver compares it with its own position and drops what is out of range, so a message reaches
+exactly the members within ``range`` metres, as a radio or an infrared link would. A delivered
+message carries the sender, the distance and the bearing — the direction of the sender in the
+receiver's own frame (radians, counter-clockwise from the receiver's heading, in (-pi, pi]), as
+ARGoS's range-and-bearing sensor and Buzz's ``neighbors`` give. An optional :class:`RadioModel`
+adds a per-link drop probability and Gaussian range and bearing noise from a seeded generator.
+``range=None`` is plain team-wide pub/sub (distance and bearing are still filled in when both
+ends have positions).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import math
+import random
+import time
+from collections import deque
+from collections.abc import AsyncIterator
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+
+class Locator(Protocol):
+    """Where this robot is: ``(x, y, heading)`` in metres and radians, or None if unknown."""
+
+    def position(self) -> tuple[float, float, float] | None: ...
+
+
+@dataclass
+class FixedLocator:
+    """A locator that stays where it is put (tests, workstations, fixed beacons)."""
+
+    x: float
+    y: float
+    heading: float = 0.0
+
+    def position(self) -> tuple[float, float, float] | None:
+        return (self.x, self.y, self.heading)
+
+
+@dataclass(frozen=True)
+class RadioModel:
+    """Imperfections of the range-limited link, applied by each receiver."""
+
+    drop: float = 0.0  # probability that a message in range is lost
+    range_noise: float = 0.0  # standard deviation of the distance, metres
+    bearing_noise: float = 0.0  # standard deviation of the bearing, radians
+    seed: int | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class Message:
+    """A delivered broadcast."""
+
+    sender: str
+    topic: str
+    data: Any
+    distance: float | None
+    bearing: float | None
+    sent: float  # the sender's timestamp (Unix seconds)
+
+
+@dataclass(frozen=True, slots=True)
+class Neighbour:
+    """A member heard recently."""
+
+    name: str
+    distance: float | None
+    bearing: float | None
+    seen: float  # local monotonic time when last heard
+
+
+class Subscription:
+    """Messages on one topic, as an async iterator; close it (or use ``async with``) when done."""
+
+    def __init__(self, topic: str, maxlen: int, on_close: Any) -> None:
+        self.topic = topic
+        self._items: deque[Message] = deque(maxlen=maxlen)
+        self._waiter: asyncio.Future[None] | None = None
+        self._closed = False
+        self._on_close = on_close
+        self.dropped = 0  # messages lost because the reader fell ``maxlen`` behind
+
+    def _put(self, message: Message) -> None:
+        if len(self._items) == self._items.maxlen:
+            self.dropped += 1
+        self._items.append(message)
+        waiter = self._waiter
+        if waiter is not None and not waiter.done():
+            waiter.set_result(None)
+
+    def get_nowait(self) -> Message | None:
+        """The next message if one is waiting, else None."""
+        return self._items.popleft() if self._items else None
+
+    def drain(self) -> list[Message]:
+        """Every message waiting now."""
+        items = list(self._items)
+        self._items.clear()
+        return items
+
+    async def get(self, timeout: float | None = None) -> Message:
+        """The next message; TimeoutError after ``timeout`` seconds, StopAsyncIteration if closed."""
+        async with asyncio.timeout(timeout):
+            while not self._items:
+                if self._closed:
+                    raise StopAsyncIteration
+                self._waiter = asyncio.get_running_loop().create_future()
+                try:
+                    await self._waiter
+                finally:
+                    self._waiter = None
+        return self._items.popleft()
+
+    def __aiter__(self) -> AsyncIterator[Message]:
+        return self
+
+    async def __anext__(self) -> Message:
+        return await self.get()
+
+    def close(self) -> None:
+        """Stop receiving; a pending ``get`` ends with StopAsyncIteration."""
+        if self._closed:
+            return
+        self._closed = True
+        self._on_close(self)
+        if self._waiter is not None and not self._waiter.done():
+            self._waiter.set_result(None)
+
+    async def __aenter__(self) -> Subscription:
+        return self
+
+    async def __aexit__(self, *exc: object) -> None:
+        self.close()
+
+
+def _wrap(angle: float) -> float:
+    a = math.fmod(angle + math.pi, 2 * math.pi)
+    if a <= 0:
+        a += 2 * math.pi
+    return a - math.pi
+
+
+class Radio:
+    """The receiving side's range filter, noise model and neighbour table."""
+
+    def __init__(self, locator: Locator | None, model: RadioModel | None) -> None:
+        self.locator = locator
+        self.model = model or RadioModel()
+        self._rng = random.Random(self.model.seed)
+        self._neighbours: dict[str, Neighbour] = {}
+        self.out_of_range = 0
+        self.lost = 0
+
+    def position(self) -> tuple[float, float, float] | None:
+        return self.locator.position() if self.locator is not None else None
+
+    def receive(
+        self, sender: str, topic: str, data: Any, where: Any, reach: Any, sent: float
+    ) -> Message | None:
+        """The message as this receiver gets it, or None if it does not reach us."""
+        me = self.position()
+        distance = bearing = None
+        if me is not None and isinstance(where, list) and len(where) >= 2:
+            dx, dy = float(where[0]) - me[0], float(where[1]) - me[1]
+            distance = math.hypot(dx, dy)
+            bearing = _wrap(math.atan2(dy, dx) - me[2])
+        if reach is not None:
+            if distance is None or distance > float(reach):
+                self.out_of_range += 1
+                return None
+            model = self.model
+            if model.drop and self._rng.random() < model.drop:
+                self.lost += 1
+                return None
+            if model.range_noise:
+                distance = max(0.0, distance + self._rng.gauss(0.0, model.range_noise))
+            if model.bearing_noise and bearing is not None:
+                bearing = _wrap(bearing + self._rng.gauss(0.0, model.bearing_noise))
+        self._neighbours[sender] = Neighbour(sender, distance, bearing, time.monotonic())
+        return Message(sender, topic, data, distance, bearing, sent)
+
+    def neighbours(self, max_age: float = 1.0) -> dict[str, Neighbour]:
+        """Members heard within the last ``max_age`` seconds."""
+        horizon = time.monotonic() - max_age
+        return {n: v for n, v in self._neighbours.items() if v.seen >= horizon}
+
+    def forget(self, name: str) -> None:
+        self._neighbours.pop(name, None)

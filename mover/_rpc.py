@@ -1,0 +1,315 @@
+"""Remote procedure calls: what a node exports, how it serves calls, how it makes them.
+
+A call is a zenoh ``get`` on ``mover/<team>/rpc/<robot>`` carrying a signed ``call`` envelope
+``[procedure, args, kwargs]``; the callee answers with one signed ``reply`` envelope, either
+``{"ok": result}`` or ``{"err": {"type", "message"}}``, then drops the query. Cancelling the
+caller's await sends a signed ``cancel`` to the callee, which cancels the procedure's task (its
+``finally`` runs). A call to a member that leaves the team mid-call fails with RobotLost; a
+caller that leaves has its calls cancelled on the callee.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import inspect
+import logging
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from functools import partial
+from typing import TYPE_CHECKING, Any, TypeVar
+
+import zenoh
+
+from . import _keys
+from ._exceptions import (
+    CALL_ERRORS,
+    CallError,
+    CallTimeout,
+    NodeClosed,
+    Refused,
+    RemoteError,
+    RobotLost,
+    UnknownRobot,
+    WireError,
+)
+from ._signature import Signature
+from ._wire import Envelope, read_refusal, refusal
+
+if TYPE_CHECKING:
+    from ._node import Node
+
+log = logging.getLogger("mover.rpc")
+
+F = TypeVar("F", bound=Callable[..., Any])
+_MARK = "__mover_procedure__"
+# How long zenoh keeps a call open when the caller set no timeout; liveliness ends it sooner.
+_NO_TIMEOUT = 7 * 24 * 3600.0
+
+
+def procedure(fn: F | None = None, *, name: str | None = None) -> Any:
+    """Mark a function as a procedure other team members may call (see ``Node.export_all``)."""
+
+    def mark(f: F) -> F:
+        setattr(f, _MARK, name or f.__name__)
+        return f
+
+    return mark(fn) if fn is not None else mark
+
+
+def procedures_of(obj: Any) -> dict[str, Callable[..., Any]]:
+    """The functions marked with :func:`procedure` in a module, class instance or mapping."""
+    items = obj.items() if isinstance(obj, dict) else ((n, getattr(obj, n)) for n in dir(obj))
+    found = {}
+    for _, value in items:
+        mark = getattr(value, _MARK, None)
+        if isinstance(mark, str) and callable(value):
+            found[mark] = value
+    return found
+
+
+@dataclass
+class Exported:
+    """One exported procedure."""
+
+    name: str
+    fn: Callable[..., Any]
+    signature: Signature
+    is_async: bool = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.is_async = inspect.iscoroutinefunction(self.fn)
+
+
+class RpcServer:
+    """Serves the calls addressed to one node."""
+
+    def __init__(self, node: Node) -> None:
+        self.node = node
+        self.exports: dict[str, Exported] = {}
+        self.tasks: dict[tuple[str, int], asyncio.Task[None]] = {}
+
+    def export(self, fn: Callable[..., Any], name: str | None = None) -> None:
+        name = name or getattr(fn, _MARK, None) or fn.__name__
+        _keys.check_name("procedure", name)
+        self.exports[name] = Exported(name, fn, Signature(fn))
+
+    def on_query(self, query: Any) -> None:
+        """An incoming call (runs on the loop)."""
+        node = self.node
+        frame = query.payload.to_bytes() if query.payload is not None else b""
+        try:
+            env = node._opener.open(frame)
+            if env.kind != "call":
+                raise WireError(f"a {env.kind!r} envelope is not a call")
+        except WireError as exc:
+            node.stats["refused"] += 1
+            node._refusal_log.warn("rpc", f"refused a call: {exc}")
+            with query:
+                if node.on_refused == "reply":
+                    query.reply(_keys.rpc(node.team_name, node.name), refusal(str(exc)))
+            return
+        node.stats["recv.call"] += 1
+        task = asyncio.get_running_loop().create_task(self._serve(query, env))
+        self.tasks[(env.sender, env.call_id)] = task
+        task.add_done_callback(lambda _: self.tasks.pop((env.sender, env.call_id), None))
+
+    async def _serve(self, query: Any, env: Envelope) -> None:
+        node = self.node
+        try:
+            reply = await self._run(env)
+        except asyncio.CancelledError:
+            reply = {"err": {"type": "Cancelled", "message": "the call was cancelled"}}
+            self._send(query, env, reply)
+            raise
+        self._send(query, env, reply)
+
+    async def _run(self, env: Envelope) -> dict[str, Any]:
+        payload = env.payload
+        if not (isinstance(payload, list) and len(payload) == 3 and isinstance(payload[0], str)
+                and isinstance(payload[1], list) and isinstance(payload[2], dict)):
+            return _err("BadArguments", "a call must carry [procedure, args, kwargs]")
+        name, args, kwargs = payload
+        exported = self.exports.get(name)
+        if exported is None:
+            log.warning("%s: %r called unknown procedure %r", self.node.name, env.sender, name)
+            known = ", ".join(sorted(self.exports)) or "none"
+            return _err("UnknownProcedure", f"{self.node.name!r} exports no procedure "
+                        f"{name!r} (exported: {known})")
+        try:
+            args, kwargs = exported.signature.bind(args, kwargs)
+        except TypeError as exc:
+            log.warning("%s: bad arguments from %r to %r: %s", self.node.name, env.sender,
+                        name, exc)
+            return _err("BadArguments", f"{name}{exported.signature.describe()}: {exc}")
+        try:
+            result = exported.fn(*args, **kwargs)
+            if exported.is_async or inspect.isawaitable(result):
+                result = await result
+        except asyncio.CancelledError:
+            raise
+        except Exception as exc:
+            log.info("%s: procedure %r raised %s: %s", self.node.name, name,
+                     type(exc).__name__, exc)
+            return _err(type(exc).__name__, str(exc))
+        return {"ok": result}
+
+    def _send(self, query: Any, env: Envelope, reply: dict[str, Any]) -> None:
+        node = self.node
+        with query:
+            try:
+                frame = node._sealer.seal("reply", reply, env.call_id)
+            except WireError as exc:
+                frame = node._sealer.seal(
+                    "reply", _err("WireError", f"cannot send the result: {exc}"), env.call_id
+                )
+            try:
+                query.reply(_keys.rpc(node.team_name, node.name), frame, express=True)
+                node.stats["sent.reply"] += 1
+            except Exception as exc:  # the session is closing, or the caller is gone
+                log.debug("could not reply to %r: %s", env.sender, exc)
+
+    def cancel(self, caller: str, call_id: int | None = None) -> None:
+        """Cancel one call of ``caller`` (or all of them)."""
+        for (who, cid), task in list(self.tasks.items()):
+            if who == caller and (call_id is None or cid == call_id):
+                task.cancel()
+
+
+def _err(kind: str, message: str) -> dict[str, Any]:
+    return {"err": {"type": kind, "message": message}}
+
+
+@dataclass
+class _Pending:
+    robot: str
+    procedure: str
+    future: asyncio.Future[Any]
+    was_member: bool
+    refusal: str | None = None
+
+
+class RpcClient:
+    """Makes calls from one node and tracks the ones in flight."""
+
+    def __init__(self, node: Node) -> None:
+        self.node = node
+        self.pending: dict[int, _Pending] = {}
+        self._next_id = 0
+
+    async def call(
+        self,
+        robot: str,
+        procedure: str,
+        args: tuple[Any, ...],
+        kwargs: dict[str, Any],
+        timeout: float | None,
+    ) -> Any:
+        node = self.node
+        _keys.check_name("robot", robot)
+        self._next_id += 1
+        call_id = self._next_id
+        frame = node._sealer.seal("call", [procedure, list(args), kwargs], call_id)
+        future: asyncio.Future[Any] = asyncio.get_running_loop().create_future()
+        self.pending[call_id] = _Pending(robot, procedure, future, robot in node.team)
+        try:
+            node._session.get(
+                _keys.rpc(node.team_name, robot),
+                node._portal.callback(partial(self._on_reply, call_id),
+                                      partial(self._on_done, call_id)),
+                payload=frame,
+                consolidation=zenoh.ConsolidationMode.NONE,
+                timeout=(timeout + 1.0) if timeout is not None else _NO_TIMEOUT,
+                express=True,
+            )
+            node.stats["sent.call"] += 1
+            try:
+                async with asyncio.timeout(timeout):
+                    return await future
+            except TimeoutError:
+                self._cancel_remote(robot, call_id)
+                raise CallTimeout(
+                    f"{procedure!r} on {robot!r} did not answer within {timeout} s",
+                    robot=robot, procedure=procedure,
+                ) from None
+            except asyncio.CancelledError:
+                if not future.done():
+                    self._cancel_remote(robot, call_id)
+                raise
+        finally:
+            self.pending.pop(call_id, None)
+
+    def _cancel_remote(self, robot: str, call_id: int) -> None:
+        node = self.node
+        try:
+            node._session.put(_keys.ctl(node.team_name, robot),
+                              node._sealer.seal("cancel", call_id, call_id))
+            node.stats["sent.cancel"] += 1
+        except Exception as exc:
+            log.debug("could not send cancel to %r: %s", robot, exc)
+
+    def _on_reply(self, call_id: int, reply: Any) -> None:
+        p = self.pending.get(call_id)
+        if p is None or p.future.done():
+            return
+        sample = reply.ok
+        if sample is None:
+            return  # zenoh's own errors (e.g. its timeout): our timers decide
+        frame = sample.payload.to_bytes()
+        reason = read_refusal(frame)
+        if reason is not None:
+            p.refusal = reason
+            return
+        node = self.node
+        try:
+            env = node._opener.open(frame)
+            if env.kind != "reply" or env.sender != p.robot or env.call_id != call_id:
+                raise WireError("reply does not match the call")
+            body = env.payload
+            if not isinstance(body, dict):
+                raise WireError("reply body is not a map")
+        except WireError as exc:
+            node._refusal_log.warn(p.robot, f"dropped a reply from {p.robot!r}: {exc}")
+            return
+        node.stats["recv.reply"] += 1
+        if "ok" in body:
+            p.future.set_result(body["ok"])
+        else:
+            p.future.set_exception(self._error(p, body.get("err")))
+
+    @staticmethod
+    def _error(p: _Pending, err: Any) -> CallError:
+        if not isinstance(err, dict):
+            err = {"type": "WireError", "message": f"malformed error {err!r}"}
+        kind, message = str(err.get("type")), str(err.get("message"))
+        cls = CALL_ERRORS.get(kind)
+        if cls is not None:
+            return cls(message, robot=p.robot, procedure=p.procedure)
+        return RemoteError(kind, message, robot=p.robot, procedure=p.procedure)
+
+    def _on_done(self, call_id: int, _: Any) -> None:
+        p = self.pending.get(call_id)
+        if p is None or p.future.done():
+            return
+        if p.refusal is not None:
+            exc: CallError = Refused(f"{p.robot!r} refused the call: {p.refusal}",
+                                     robot=p.robot, procedure=p.procedure)
+        elif p.was_member:
+            exc = RobotLost(f"{p.robot!r} was lost during {p.procedure!r}",
+                            robot=p.robot, procedure=p.procedure)
+        else:
+            exc = UnknownRobot(f"no member {p.robot!r} of team {self.node.team_name!r} answers",
+                               robot=p.robot, procedure=p.procedure)
+        p.future.set_exception(exc)
+
+    def robot_left(self, robot: str) -> None:
+        for p in self.pending.values():
+            if p.robot == robot and not p.future.done():
+                p.future.set_exception(RobotLost(
+                    f"{robot!r} left the team during {p.procedure!r}",
+                    robot=robot, procedure=p.procedure))
+
+    def close(self) -> None:
+        for p in self.pending.values():
+            if not p.future.done():
+                p.future.set_exception(NodeClosed("the node closed during the call"))
+

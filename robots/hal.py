@@ -1,0 +1,228 @@
+"""The hardware-abstraction layer: what a robot process needs from its hardware.
+
+The robot side owns these interfaces (``typing.Protocol``s); the simulated hardware in
+``sim_hw`` (in-process or over zenoh) and, one day, real robots satisfy them structurally.
+Nothing here imports pymunk or ``sim_hw``.
+
+Conventions:
+
+* Units are SI: metres, seconds, radians, newtons. Angles are counter-clockwise; a bearing is
+  measured from the robot's heading (positive to the left), in (-π, π].
+* Sensors are read without waiting: a reading is the value measured at the last control tick.
+  Actuator commands (drive, LED, floor writes) take effect at the next tick.
+* Time is the hardware's own clock (simulated time in simulation): a robot waits with
+  ``await hw.clock.tick()`` or ``await hw.clock.sleep(dt)``, never with ``asyncio.sleep``.
+* The robot never gets ground truth, except through the radio locator, which exists only so
+  that the transport's range-limited broadcast can compute ranges.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal, Protocol, runtime_checkable
+
+__all__ = [
+    "BumperSide",
+    "Bumper",
+    "Camera",
+    "Clock",
+    "Drive",
+    "FloorCell",
+    "FloorCells",
+    "Hardware",
+    "Led",
+    "Odometry",
+    "PushResult",
+    "PushSense",
+    "RadioLocator",
+    "Sighting",
+    "Sonar",
+]
+
+Pose = tuple[float, float, float]
+"""(x, y, heading) in metres and radians."""
+
+BumperSide = Literal["front", "left", "right", "back"]
+"""Which part of the bumper ring is pressed (front is ±45° around the heading)."""
+
+
+@dataclass(frozen=True, slots=True)
+class Sighting:
+    """One thing the camera sees.
+
+    ``kind`` is e.g. ``"robot"``, ``"box"``, ``"immovable"``, ``"target"``, ``"beacon"``,
+    ``"resource"``; ``status`` is what it shows (a robot's LED, a beacon's code, a resource's
+    amount as text). ``range`` is centre to centre in metres; ``bearing`` is relative to the
+    robot's heading, in radians.
+    """
+
+    kind: str
+    id: str
+    status: str
+    range: float
+    bearing: float
+
+
+@dataclass(frozen=True, slots=True)
+class FloorCell:
+    """The content of one floor cell: an integer and a colour name (``""`` when unset)."""
+
+    value: int
+    colour: str
+
+
+@dataclass(frozen=True, slots=True)
+class PushResult:
+    """Outcome of a push test: what was pushed, how far it moved, and whether that counts.
+
+    ``object_id`` is ``None`` when nothing was in front of the robot.
+    """
+
+    object_id: str | None
+    displacement: float
+    moved: bool
+
+
+@runtime_checkable
+class Drive(Protocol):
+    """Differential drive, commanded by forward speed and turn rate."""
+
+    max_speed: float
+    """Largest forward speed in m/s; faster commands are clipped."""
+
+    def set_velocity(self, v: float, omega: float) -> None:
+        """Drive at ``v`` m/s forward and ``omega`` rad/s (counter-clockwise) from the next tick."""
+        ...
+
+    def stop(self) -> None:
+        """Stop both wheels from the next tick."""
+        ...
+
+
+@runtime_checkable
+class Sonar(Protocol):
+    """A ring of range sensors."""
+
+    angles: tuple[float, ...]
+    """Direction of each ray relative to the heading, in radians."""
+    max_range: float
+    """A ray that hits nothing reads this value (metres)."""
+
+    def ranges(self) -> tuple[float, ...]:
+        """Distance from the robot's rim to the nearest obstacle along each ray (noisy)."""
+        ...
+
+
+@runtime_checkable
+class Bumper(Protocol):
+    """A contact ring around the robot."""
+
+    def pressed(self) -> bool:
+        """Whether anything touches the robot."""
+        ...
+
+    def side(self) -> BumperSide | None:
+        """Which part of the ring is pressed, or ``None``."""
+        ...
+
+
+@runtime_checkable
+class Odometry(Protocol):
+    """Dead reckoning from wheel motion: drifts with the configured noise."""
+
+    def pose(self) -> Pose:
+        """The dead-reckoned (x, y, heading); starts at the robot's spawn pose."""
+        ...
+
+
+@runtime_checkable
+class Camera(Protocol):
+    """Detects robots and objects within a range and field of view."""
+
+    max_range: float
+    fov: float
+    """Full field of view in radians, centred on the heading."""
+
+    def sightings(self) -> tuple[Sighting, ...]:
+        """What is visible now, nearest first."""
+        ...
+
+
+@runtime_checkable
+class Led(Protocol):
+    """A status light other robots' cameras can read."""
+
+    def show(self, status: str) -> None:
+        """Show ``status`` from the next tick."""
+        ...
+
+
+@runtime_checkable
+class RadioLocator(Protocol):
+    """Where the radio is, for the transport's range-limited broadcast only.
+
+    Behaviours must not use this: it is ground truth.
+    """
+
+    def position(self) -> Pose | None:
+        """Ground-truth (x, y, heading), or ``None`` when unknown."""
+        ...
+
+
+@runtime_checkable
+class FloorCells(Protocol):
+    """A floor of writable cells (an RFID floor): one integer and one colour per cell."""
+
+    def read(self) -> FloorCell:
+        """The cell under the robot's centre."""
+        ...
+
+    def write(self, value: int, colour: str = "") -> None:
+        """Write the cell under the robot (applied at the next tick; read() shows it at once)."""
+        ...
+
+
+@runtime_checkable
+class PushSense(Protocol):
+    """MOVER's "movable?" test: push what is in front with a bounded force and watch it."""
+
+    async def push(self, force: float, duration: float) -> PushResult:
+        """Drive forward for ``duration`` s with at most ``force`` N; stop; report the motion."""
+        ...
+
+
+@runtime_checkable
+class Clock(Protocol):
+    """The hardware's clock: simulated time in simulation."""
+
+    tick_period: float
+    """Seconds of hardware time between control ticks."""
+
+    def now(self) -> float:
+        """Hardware time in seconds."""
+        ...
+
+    async def tick(self) -> None:
+        """Send this tick's commands and wait for the next tick's readings."""
+        ...
+
+    async def sleep(self, dt: float) -> None:
+        """Let ``dt`` seconds of hardware time pass (whole ticks, at least one)."""
+        ...
+
+
+@dataclass(frozen=True, slots=True)
+class Hardware:
+    """Everything a robot process can touch, grouped; a device is ``None`` when absent."""
+
+    id: str
+    clock: Clock
+    drive: Drive
+    odometry: Odometry
+    sonar: Sonar | None = None
+    bumper: Bumper | None = None
+    camera: Camera | None = None
+    led: Led | None = None
+    radio: RadioLocator | None = None
+    floor: FloorCells | None = None
+    push: PushSense | None = None

@@ -1,0 +1,250 @@
+"""Maze worlds for distributed exploration: generation, files, the star sensor, moves.
+
+Linardakis et al. (papers/linardakis-cu-lvp-maze-exploration.txt), section IV-A: a
+recursive-backtracker maze whose free cells also open their four neighbours with probability
+``1 - obstacle_probability``, with a wall on the border. A "30x30" maze is a 31x31 grid
+(15x15 backtracker cells, corridors and walls one cell wide), i.e. 29x29 inner cells.
+Obstacle probability 0.85 gives the corridor-like maze, 0.15 the nearly open one.
+
+As the authors' reference generator does, a cell whose four neighbours are all walls has them
+cleared (so that no wall block is left that no agent can see, and no agent is boxed in); the
+border is then walled again.
+
+Cells: 0 free, 1 obstacle. Positions are ``(row, col)``. This module is the simulated hardware
+side: the ground truth, the range-2 star sensor (section III-A) and the moves a world allows.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+FREE = 0
+OBSTACLE = 1
+
+#: The 8 rays of the star sensor: 4 straight, 4 diagonal (section III-A).
+RAYS: tuple[tuple[int, int], ...] = (
+    (-1, 0), (1, 0), (0, -1), (0, 1), (-1, -1), (-1, 1), (1, -1), (1, 1),
+)
+#: 4-connected moves an agent may make, plus staying put.
+MOVES: tuple[tuple[int, int], ...] = ((0, 0), (-1, 0), (1, 0), (0, -1), (0, 1))
+
+_STEPS = ((0, 1), (1, 0), (0, -1), (-1, 0))
+
+
+class MazeFileError(ValueError):
+    """A maze file is unreadable or malformed; the message names the file and the fault."""
+
+
+@dataclass
+class Maze:
+    """A maze grid (0 free, 1 obstacle) and the agents' start cells, in order."""
+
+    grid: np.ndarray
+    starts: list[tuple[int, int]] = field(default_factory=list)
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """``(rows, cols)`` of the grid, border included."""
+        return (int(self.grid.shape[0]), int(self.grid.shape[1]))
+
+
+def generate_maze(
+    size: int | tuple[int, int],
+    obstacle_probability: float,
+    rng: np.random.Generator,
+    n_starts: int = 20,
+) -> Maze:
+    """A seeded maze as in section IV-A, with ``n_starts`` distinct random free start cells.
+
+    ``size`` is the paper's nominal size (30 for "30x30"); the grid is ``2*(size//2)+1`` wide.
+    """
+    rows, cols = (size, size) if isinstance(size, int) else size
+    if rows < 4 or cols < 4:
+        raise ValueError(f"maze size must be at least 4x4, got {rows}x{cols}")
+    if not 0.0 <= obstacle_probability <= 1.0:
+        raise ValueError(f"obstacle probability must be in [0, 1], got {obstacle_probability}")
+    grid = _backtracker(rows // 2, cols // 2, rng)
+    # Section IV-A: each free cell opens its 4 neighbours with probability 1 - p.
+    opened = (grid == FREE) & (rng.random(grid.shape) >= obstacle_probability)
+    grid[1:, :][opened[:-1, :]] = FREE
+    grid[:-1, :][opened[1:, :]] = FREE
+    grid[:, 1:][opened[:, :-1]] = FREE
+    grid[:, :-1][opened[:, 1:]] = FREE
+    _wall_border(grid)
+    _clear_enclosed(grid)
+    _wall_border(grid)
+    return Maze(grid, random_starts(grid, n_starts, rng))
+
+
+def _backtracker(rc: int, cc: int, rng: np.random.Generator) -> np.ndarray:
+    """A perfect maze by recursive backtracking over ``rc x cc`` cells (iterative DFS)."""
+    grid = np.ones((2 * rc + 1, 2 * cc + 1), dtype=np.int8)
+    grid[1, 1] = FREE
+    stack = [(0, 0)]
+    while stack:
+        x, y = stack[-1]
+        for k in rng.permutation(4):
+            dx, dy = _STEPS[k]
+            nx, ny = x + dx, y + dy
+            if 0 <= nx < rc and 0 <= ny < cc and grid[2 * nx + 1, 2 * ny + 1] == OBSTACLE:
+                grid[2 * nx + 1, 2 * ny + 1] = FREE
+                grid[2 * x + 1 + dx, 2 * y + 1 + dy] = FREE
+                stack.append((nx, ny))
+                break
+        else:
+            stack.pop()
+    return grid
+
+
+def _wall_border(grid: np.ndarray) -> None:
+    grid[0, :] = OBSTACLE
+    grid[-1, :] = OBSTACLE
+    grid[:, 0] = OBSTACLE
+    grid[:, -1] = OBSTACLE
+
+
+def _clear_enclosed(grid: np.ndarray) -> None:
+    """Clear the 4 walls around any cell walled on all 4 sides (reference generator)."""
+    rows, cols = grid.shape
+    for i in range(1, rows - 1):
+        for j in range(1, cols - 1):
+            if grid[i - 1, j] and grid[i + 1, j] and grid[i, j - 1] and grid[i, j + 1]:
+                grid[i - 1, j] = grid[i + 1, j] = grid[i, j - 1] = grid[i, j + 1] = FREE
+
+
+def random_starts(grid: np.ndarray, n: int, rng: np.random.Generator) -> list[tuple[int, int]]:
+    """``n`` distinct free cells chosen at random (fewer if the maze has fewer free cells)."""
+    free = np.argwhere(grid == FREE)
+    pick = rng.choice(len(free), size=min(n, len(free)), replace=False)
+    return [(int(free[k][0]), int(free[k][1])) for k in pick]
+
+
+def visible_cells(
+    grid: np.ndarray, pos: tuple[int, int], reach: int = 2
+) -> list[tuple[int, int, int]]:
+    """What the star sensor sees from ``pos``: ``(row, col, value)`` triples.
+
+    Section III-A: 8 rays (4 straight, 4 diagonal) up to ``reach`` cells; a ray stops at the
+    first obstacle, which it records. The agent's own cell is included.
+    """
+    rows, cols = grid.shape
+    r0, c0 = pos
+    seen = [(r0, c0, int(grid[r0, c0]))]
+    for dr, dc in RAYS:
+        for k in range(1, reach + 1):
+            r, c = r0 + k * dr, c0 + k * dc
+            if not (0 <= r < rows and 0 <= c < cols):
+                break
+            v = int(grid[r, c])
+            seen.append((r, c, v))
+            if v == OBSTACLE:
+                break
+    return seen
+
+
+def broadcast_range(shape: tuple[int, int]) -> int:
+    """Section III-B: 25 % of the maze's larger side, in cells (7 for a 31x31 grid)."""
+    return int(0.25 * max(shape))
+
+
+def in_range(a: tuple[int, int], b: tuple[int, int], reach: int) -> bool:
+    """Whether two agents can hear each other: Manhattan distance within ``reach``, as the
+    reference code measures it on the 4-connected grid."""
+    return abs(a[0] - b[0]) + abs(a[1] - b[1]) <= reach
+
+
+class MazeWorld:
+    """Ground truth plus the agents' cells; applies moves in the order they are given."""
+
+    def __init__(self, maze: Maze, n_agents: int) -> None:
+        if n_agents > len(maze.starts):
+            raise ValueError(f"{n_agents} agents but the maze has {len(maze.starts)} starts")
+        self.grid = maze.grid
+        self.positions = [tuple(p) for p in maze.starts[:n_agents]]
+        for p in self.positions:
+            if self.grid[p] != FREE:
+                raise ValueError(f"start {p} is not a free cell")
+        self._occupied = set(self.positions)
+        self.reach = broadcast_range(maze.shape)
+
+    def sense(self, i: int, reach: int = 2) -> list[tuple[int, int, int]]:
+        """The star sensor of agent ``i``."""
+        return visible_cells(self.grid, self.positions[i], reach)
+
+    def move(self, i: int, step: tuple[int, int]) -> bool:
+        """Move agent ``i`` one cell (4-connected) unless into an obstacle or occupied cell."""
+        if tuple(step) not in MOVES:
+            raise ValueError(f"illegal move {step!r}")
+        if step == (0, 0):
+            return False
+        r, c = self.positions[i]
+        target = (r + step[0], c + step[1])
+        if self.grid[target] != FREE or target in self._occupied:
+            return False
+        self._occupied.discard((r, c))
+        self._occupied.add(target)
+        self.positions[i] = target
+        return True
+
+    def neighbours(self, i: int) -> list[int]:
+        """Agents that hear agent ``i``'s broadcast this round (within range, not ``i``)."""
+        p = self.positions[i]
+        return [j for j, q in enumerate(self.positions) if j != i and in_range(p, q, self.reach)]
+
+
+def save_maze(path: str | Path, maze: Maze) -> None:
+    """Write ``{"grid": [[0,1,...],...], "starts": [[row, col], ...]}``."""
+    data = {"grid": maze.grid.astype(int).tolist(), "starts": [list(s) for s in maze.starts]}
+    Path(path).write_text(json.dumps(data))
+
+
+def load_maze(path: str | Path) -> Maze:
+    """Read a maze JSON file; raise :class:`MazeFileError` naming the file and the fault."""
+    p = Path(path)
+    try:
+        data = json.loads(p.read_text())
+    except OSError as exc:
+        raise MazeFileError(f"{p}: cannot read: {exc.strerror or exc}") from exc
+    except json.JSONDecodeError as exc:
+        raise MazeFileError(f"{p}: not JSON: {exc}") from exc
+    if not isinstance(data, dict) or "grid" not in data:
+        raise MazeFileError(f'{p}: expected an object with a "grid" key')
+    rows = data["grid"]
+    if not isinstance(rows, list) or not rows or not all(isinstance(r, list) for r in rows):
+        raise MazeFileError(f"{p}: grid must be a non-empty list of rows")
+    width = len(rows[0])
+    for i, row in enumerate(rows):
+        if len(row) != width:
+            raise MazeFileError(f"{p}: grid row {i} has {len(row)} cells, row 0 has {width}")
+        bad = [v for v in row if v not in (0, 1) or isinstance(v, bool)]
+        if bad:
+            raise MazeFileError(f"{p}: grid row {i} holds {bad[0]!r}; cells must be 0 or 1")
+    grid = np.array(rows, dtype=np.int8)
+    if grid.shape[0] < 3 or grid.shape[1] < 3:
+        raise MazeFileError(f"{p}: grid is {grid.shape[0]}x{grid.shape[1]}, at least 3x3 needed")
+    if not (grid[0].all() and grid[-1].all() and grid[:, 0].all() and grid[:, -1].all()):
+        raise MazeFileError(f"{p}: the border must be obstacles (1)")
+    starts = _parse_starts(p, data.get("starts", []), grid)
+    return Maze(grid, starts)
+
+
+def _parse_starts(p: Path, raw: object, grid: np.ndarray) -> list[tuple[int, int]]:
+    if not isinstance(raw, list):
+        raise MazeFileError(f"{p}: starts must be a list of [row, col]")
+    starts: list[tuple[int, int]] = []
+    for k, s in enumerate(raw):
+        if not (isinstance(s, list) and len(s) == 2 and all(type(v) is int for v in s)):
+            raise MazeFileError(f"{p}: start {k} is {s!r}, expected [row, col]")
+        r, c = s
+        if not (0 <= r < grid.shape[0] and 0 <= c < grid.shape[1]):
+            raise MazeFileError(f"{p}: start {k} {s} is outside the {grid.shape} grid")
+        if grid[r, c] != FREE:
+            raise MazeFileError(f"{p}: start {k} {s} is an obstacle")
+        if (r, c) in starts:
+            raise MazeFileError(f"{p}: start {k} {s} repeats an earlier start")
+        starts.append((r, c))
+    return starts
