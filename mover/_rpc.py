@@ -232,7 +232,7 @@ class RpcClient:
                     robot=robot, procedure=procedure,
                 ) from None
             except asyncio.CancelledError:
-                if not future.done():
+                if future.cancelled():  # awaiting it was cancelled, not answered
                     self._cancel_remote(robot, call_id)
                 raise
         finally:

@@ -1,0 +1,93 @@
+"""A robot process for mover's integration tests: a node with test procedures.
+
+Run as ``python -m tests.helpers.robot_proc --name NAME [--x X --y Y --heading H]``; team and
+zenoh settings come from the MOVER_* environment. Prints ``READY`` once it is a member.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import logging
+import os
+import sys
+from pathlib import Path
+from typing import Any
+
+from mover import FixedLocator, Node, NodeConfig, Team
+
+TOPICS = ("news", "chatter")
+
+
+async def main(args: argparse.Namespace) -> None:
+    team = Team.from_env()
+    state = {"bumps": 0}
+    heard: dict[str, list[list[Any]]] = {t: [] for t in TOPICS}
+    locator = FixedLocator(args.x, args.y, args.heading)
+    async with Node(args.name, team, kind=args.kind, config=NodeConfig.from_env(),
+                    locator=locator, max_size=args.max_size) as node:
+
+        async def add(x: int, y: int) -> int:
+            return x + y
+
+        def boom(message: str) -> None:
+            raise ValueError(message)
+
+        async def sleep(seconds: float) -> str:
+            await asyncio.sleep(seconds)
+            return "slept"
+
+        async def hold(marker: str) -> None:
+            Path(marker).write_text("started")
+            try:
+                await asyncio.Event().wait()
+            finally:
+                Path(marker).write_text("cleaned")
+
+        def bump() -> int:
+            state["bumps"] += 1
+            return state["bumps"]
+
+        def bumps() -> int:
+            return state["bumps"]
+
+        def send(topic: str, data: Any, range: float | None = None) -> None:
+            node.broadcast(topic, data, range=range)
+
+        def heard_on(topic: str) -> list[list[Any]]:
+            return heard[topic]
+
+        async def call_other(robot: str, procedure: str, args: list[Any]) -> Any:
+            return await node.call(robot, procedure, *args, timeout=5.0)
+
+        def echo(data: bytes) -> int:
+            return len(data)
+
+        for fn in (add, boom, sleep, hold, bump, bumps, send, call_other, echo):
+            node.export(fn)
+        node.export(heard_on, "heard")
+
+        async def listen(topic: str) -> None:
+            async for m in node.subscribe(topic):
+                heard[topic].append([m.sender, m.data, m.distance, m.bearing])
+
+        listeners = [asyncio.create_task(listen(t)) for t in TOPICS]
+        await node.team.wait_for({node.name}, timeout=10)
+        print("READY", os.getpid(), flush=True)
+        try:
+            await asyncio.get_running_loop().run_in_executor(None, sys.stdin.read)
+        finally:
+            for task in listeners:
+                task.cancel()
+
+
+if __name__ == "__main__":
+    p = argparse.ArgumentParser()
+    p.add_argument("--name", required=True)
+    p.add_argument("--kind", default="robot")
+    p.add_argument("--x", type=float, default=0.0)
+    p.add_argument("--y", type=float, default=0.0)
+    p.add_argument("--heading", type=float, default=0.0)
+    p.add_argument("--max-size", type=int, default=4 * 1024 * 1024)
+    logging.basicConfig(level=logging.INFO, format=f"%(name)s %(levelname)s %(message)s")
+    asyncio.run(main(p.parse_args()))
