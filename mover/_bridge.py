@@ -80,3 +80,40 @@ class Portal:
         """Stop accepting items; items already queued are dropped."""
         self._closed = True
         self._items.clear()
+
+
+async def run_blocking(fn: Callable[[], Any]) -> Any:
+    """Run a blocking zenoh call (open, close) on a thread of its own, joined before returning.
+
+    Unlike ``asyncio.to_thread`` this leaves no executor thread behind after the node closes.
+    """
+    import threading
+
+    loop = asyncio.get_running_loop()
+    future: asyncio.Future[Any] = loop.create_future()
+
+    def settle(outcome: tuple[bool, Any]) -> None:
+        if future.done():
+            return
+        ok, value = outcome
+        if ok:
+            future.set_result(value)
+        else:
+            future.set_exception(value)
+
+    def work() -> None:
+        try:
+            outcome: tuple[bool, Any] = (True, fn())
+        except BaseException as exc:
+            outcome = (False, exc)
+        try:
+            loop.call_soon_threadsafe(settle, outcome)
+        except RuntimeError:  # the loop is gone
+            pass
+
+    thread = threading.Thread(target=work, name="mover-blocking", daemon=True)
+    thread.start()
+    try:
+        return await future
+    finally:
+        thread.join(timeout=10)

@@ -21,15 +21,24 @@ from typing import Any, Literal
 import zenoh
 
 from . import _keys
-from ._bridge import Portal
+from ._bridge import Portal, run_blocking
 from ._config import NodeConfig, Team
-from ._exceptions import MoverError, WireError
+from ._exceptions import MoverError, PayloadTooLarge, WireError
 from ._membership import Membership
 from ._radio import Locator, Message, Neighbour, Radio, RadioModel, Subscription
 from ._rpc import RpcClient, RpcServer, procedures_of
-from ._wire import DEFAULT_MAX_SIZE, Opener, Sealer
+from ._wire import DEFAULT_MAX_SIZE, Opener, Sealer, pack
 
 log = logging.getLogger("mover.node")
+
+
+def _array_header(n: int) -> bytes:
+    """The msgpack header of an array of ``n`` elements."""
+    if n < 16:
+        return bytes([0x90 | n])
+    if n < 65536:
+        return b"\xdc" + n.to_bytes(2, "big")
+    return b"\xdd" + n.to_bytes(4, "big")
 
 
 class _RateLimitedLog:
@@ -89,6 +98,8 @@ class Node:
         self._client = RpcClient(self)
         self._subs: dict[str, tuple[Any, list[Subscription]]] = {}
         self._publishers: dict[tuple[str, bool], Any] = {}
+        self._outbox: dict[tuple[str, bool], list[bytes]] = {}
+        self._flush_scheduled = False
         self._declared: list[Any] = []
         self._session: Any = None
         self._portal: Portal | None = None  # type: ignore[assignment]
@@ -108,7 +119,7 @@ class Node:
         loop = asyncio.get_running_loop()
         self._portal = Portal(loop)
         conf = self.config.to_zenoh()
-        self._session = await asyncio.to_thread(zenoh.open, conf)
+        self._session = await run_blocking(lambda: zenoh.open(conf))
         team, portal, session = self.team_config.name, self._portal, self._session
         self.team.on_leave(self._member_left)
         self._declared += [
@@ -129,6 +140,7 @@ class Node:
         """Leave the team: cancel served calls, fail pending ones, close the session."""
         if self._session is None:
             return
+        self._flush()
         tasks = list(self._server.tasks.values())
         for task in tasks:
             task.cancel()
@@ -140,7 +152,7 @@ class Node:
         session, self._session = self._session, None
         assert self._portal is not None
         self._portal.close()
-        await asyncio.to_thread(self._close_session, session)
+        await run_blocking(lambda: self._close_session(session))
 
     def _close_session(self, session: Any) -> None:
         for entity in reversed(self._declared):
@@ -203,22 +215,56 @@ class Node:
         """Send ``data`` on ``topic`` to the members within ``range`` metres of this node now.
 
         ``range=None`` reaches the whole team. ``reliable=True`` blocks rather than drops when
-        the network is congested (default: drop, as a radio would).
+        the network is congested (default: drop, as a radio would). Broadcasts made in one
+        turn of the event loop leave together, at the end of that turn, as one signed frame per
+        topic (so a burst costs one signature and one zenoh message); each keeps the position
+        this node had when it was made. Raises PayloadTooLarge at once for oversized data.
         """
         self._require_open()
-        _keys.check_topic(topic)
         if range is not None and range < 0:
             raise ValueError("range must be >= 0")
         where = self.radio.position()
-        frame = self._sealer.seal("bc", [topic, data, list(where) if where else None, range])
+        item = pack([data, list(where) if where else None, range])
+        if len(item) > self._sealer.max_size // 2:
+            raise PayloadTooLarge(f"broadcast of {len(item)} bytes is over the limit")
+        box = self._outbox.get((topic, reliable))
+        if box is None:
+            _keys.check_topic(topic)
+            box = self._outbox[(topic, reliable)] = []
+        box.append(item)
+        if not self._flush_scheduled:
+            self._flush_scheduled = True
+            asyncio.get_running_loop().call_soon(self._flush)
+
+    def _flush(self) -> None:
+        self._flush_scheduled = False
+        if self._session is None:
+            return
+        outbox, self._outbox = self._outbox, {}
+        limit = self._sealer.max_size // 2
+        for (topic, reliable), items in outbox.items():
+            pub = self._publisher(topic, reliable)
+            start = 0
+            while start < len(items):
+                end, size = start, 0
+                while end < len(items) and (end == start or size + len(items[end]) < limit):
+                    size += len(items[end])
+                    end += 1
+                payload = b"\x92" + pack(topic) + _array_header(end - start) + b"".join(
+                    items[start:end])
+                pub.put(self._sealer.seal_packed("bc", payload))
+                self.stats["sent.bc_frames"] += 1
+                start = end
+            self.stats["sent.bc"] += len(items)
+
+    def _publisher(self, topic: str, reliable: bool) -> Any:
         pub = self._publishers.get((topic, reliable))
         if pub is None:
             congestion = zenoh.CongestionControl.BLOCK if reliable else zenoh.CongestionControl.DROP
             pub = self._session.declare_publisher(
-                _keys.broadcast(self.team_config.name, topic), congestion_control=congestion)
+                _keys.broadcast(self.team_name, topic), congestion_control=congestion)
             self._publishers[(topic, reliable)] = pub
-        pub.put(frame)
-        self.stats["sent.bc"] += 1
+        return pub
 
     def subscribe(self, topic: str, *, maxlen: int = 100_000) -> Subscription:
         """Messages on ``topic`` that reach this node, as an async iterator."""
@@ -248,24 +294,30 @@ class Node:
     def _on_bc(self, sample: Any) -> None:
         try:
             env = self._opener.open(sample.payload.to_bytes())
-            if env.kind != "bc" or not isinstance(env.payload, list) or len(env.payload) != 4:
+            payload = env.payload
+            if env.kind != "bc" or not isinstance(payload, list) or len(payload) != 2:
+                raise WireError("not a broadcast envelope")
+            topic, items = payload
+            if not isinstance(items, list):
                 raise WireError("not a broadcast envelope")
         except WireError as exc:
             self.stats["refused"] += 1
             self._refusal_log.warn("bc", f"dropped a broadcast on {sample.key_expr}: {exc}")
             return
-        if env.sender == self.name:
-            return
-        topic, data, where, reach = env.payload
         entry = self._subs.get(topic)
-        if entry is None:
+        if env.sender == self.name or entry is None:
             return
-        message = self.radio.receive(env.sender, topic, data, where, reach, env.timestamp)
-        if message is None:
-            return
-        self.stats["recv.bc"] += 1
-        for sub in entry[1]:
-            sub._put(message)
+        receive, subs = self.radio.receive, entry[1]
+        delivered = 0
+        for item in items:
+            if not (isinstance(item, list) and len(item) == 3):
+                continue
+            message = receive(env.sender, topic, item[0], item[1], item[2], env.timestamp)
+            if message is not None:
+                delivered += 1
+                for sub in subs:
+                    sub._put(message)
+        self.stats["recv.bc"] += delivered
 
     def neighbours(self, max_age: float = 1.0) -> dict[str, Neighbour]:
         """Members heard by broadcast within the last ``max_age`` seconds, with range/bearing."""

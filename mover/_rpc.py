@@ -109,21 +109,37 @@ class RpcServer:
                     query.reply(_keys.rpc(node.team_name, node.name), refusal(str(exc)))
             return
         node.stats["recv.call"] += 1
-        task = asyncio.get_running_loop().create_task(self._serve(query, env))
+        prepared = self._prepare(env)
+        if isinstance(prepared, dict):
+            self._send(query, env, prepared)
+            return
+        exported, args, kwargs = prepared
+        if not exported.is_async:
+            # A plain function runs here and now, on the loop: no task, no extra loop turn.
+            result = self._outcome(exported, lambda: exported.fn(*args, **kwargs))
+            if not inspect.isawaitable(result):
+                self._send(query, env, result)
+                return
+            awaitable = result
+        else:
+            awaitable = exported.fn(*args, **kwargs)
+        task = asyncio.get_running_loop().create_task(self._serve(query, env, exported, awaitable))
         self.tasks[(env.sender, env.call_id)] = task
         task.add_done_callback(lambda _: self.tasks.pop((env.sender, env.call_id), None))
 
-    async def _serve(self, query: Any, env: Envelope) -> None:
-        node = self.node
+    async def _serve(self, query: Any, env: Envelope, exported: Exported, awaitable: Any) -> None:
         try:
-            reply = await self._run(env)
+            result = await awaitable
         except asyncio.CancelledError:
-            reply = {"err": {"type": "Cancelled", "message": "the call was cancelled"}}
-            self._send(query, env, reply)
+            self._send(query, env, _err("Cancelled", "the call was cancelled"))
             raise
-        self._send(query, env, reply)
+        except Exception as exc:
+            self._send(query, env, self._failure(exported, exc))
+            return
+        self._send(query, env, {"ok": result})
 
-    async def _run(self, env: Envelope) -> dict[str, Any]:
+    def _prepare(self, env: Envelope) -> dict[str, Any] | tuple[Exported, list[Any], dict[str, Any]]:
+        """The procedure and its checked arguments, or the error to reply with."""
         payload = env.payload
         if not (isinstance(payload, list) and len(payload) == 3 and isinstance(payload[0], str)
                 and isinstance(payload[1], list) and isinstance(payload[2], dict)):
@@ -141,17 +157,20 @@ class RpcServer:
             log.warning("%s: bad arguments from %r to %r: %s", self.node.name, env.sender,
                         name, exc)
             return _err("BadArguments", f"{name}{exported.signature.describe()}: {exc}")
+        return exported, args, kwargs
+
+    def _outcome(self, exported: Exported, run: Callable[[], Any]) -> Any:
+        """Run a plain procedure: the reply body, or an awaitable it returned."""
         try:
-            result = exported.fn(*args, **kwargs)
-            if exported.is_async or inspect.isawaitable(result):
-                result = await result
-        except asyncio.CancelledError:
-            raise
+            result = run()
         except Exception as exc:
-            log.info("%s: procedure %r raised %s: %s", self.node.name, name,
-                     type(exc).__name__, exc)
-            return _err(type(exc).__name__, str(exc))
-        return {"ok": result}
+            return self._failure(exported, exc)
+        return result if inspect.isawaitable(result) else {"ok": result}
+
+    def _failure(self, exported: Exported, exc: Exception) -> dict[str, Any]:
+        log.info("%s: procedure %r raised %s: %s", self.node.name, exported.name,
+                 type(exc).__name__, exc)
+        return _err(type(exc).__name__, str(exc))
 
     def _send(self, query: Any, env: Envelope, reply: dict[str, Any]) -> None:
         node = self.node

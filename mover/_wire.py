@@ -120,11 +120,14 @@ class Sealer:
 
     def seal(self, kind: str, payload: Any, call_id: int = 0) -> bytes:
         """Return the signed frame of a new envelope; raise PayloadTooLarge over the limit."""
+        return self.seal_packed(kind, pack(payload), call_id)
+
+    def seal_packed(self, kind: str, payload: bytes, call_id: int = 0) -> bytes:
+        """Like :meth:`seal` for a payload already encoded with :func:`pack`."""
         self._counter += 1
         nonce = self._epoch + self._counter.to_bytes(8, "big")
-        body = pack(
-            [VERSION, self.team, self.sender, kind, call_id, time.time(), nonce, payload]
-        )
+        head = pack([VERSION, self.team, self.sender, kind, call_id, time.time(), nonce])
+        body = b"\x98" + head[1:] + payload  # the same fields as an 8-element array
         if len(body) + TAG_SIZE + 2 > self.max_size:
             raise PayloadTooLarge(
                 f"{kind} envelope of {len(body)} bytes is over the limit of {self.max_size}"

@@ -1,0 +1,62 @@
+"""Unit tests of argument checking against signatures and type hints."""
+
+from __future__ import annotations
+
+from typing import Any, Literal
+
+import numpy as np
+import pytest
+
+from mover._signature import Signature
+
+
+def f(
+    a: int,
+    b: float,
+    c: str | None = None,
+    d: list[int] | None = None,
+    e: tuple[float, float] = (0.0, 0.0),
+    m: dict[str, bool] | None = None,
+    mode: Literal["fast", "slow"] = "fast",
+    arr: np.ndarray | None = None,
+    anything: Any = None,
+) -> None: ...
+
+
+def bind(*args: Any, **kwargs: Any) -> tuple[list[Any], dict[str, Any]]:
+    return Signature(f).bind(list(args), kwargs)
+
+
+def test_good_arguments_pass_and_ints_become_floats() -> None:
+    args, _ = bind(1, 2, "x", [1, 2], [1, 2], {"k": True}, "slow", np.zeros(2), object())
+    assert args[1] == 2.0 and isinstance(args[1], float)
+    assert args[4] == [1.0, 2.0]
+
+
+@pytest.mark.parametrize(
+    ("args", "kwargs", "message"),
+    [
+        ((True, 1.0), {}, "argument 'a': expected int, got bool"),
+        (("1", 1.0), {}, "argument 'a': expected int, got str"),
+        ((1, "x"), {}, "argument 'b': expected float"),
+        ((1, 1.0), {"d": [1, "2"]}, "argument 'd'"),
+        ((1, 1.0), {"e": [1.0]}, "argument 'e': expected a sequence of 2"),
+        ((1, 1.0), {"m": {"k": 1}}, "argument 'm'"),
+        ((1, 1.0), {"mode": "medium"}, "argument 'mode': expected one of"),
+        ((1, 1.0), {"arr": [1, 2]}, "argument 'arr'"),
+        ((1,), {}, "missing a required argument: 'b'"),
+        ((1, 1.0), {"z": 1}, "unexpected keyword argument 'z'"),
+    ],
+)
+def test_bad_arguments_are_named(args: tuple[Any, ...], kwargs: dict[str, Any], message: str) -> None:
+    with pytest.raises(TypeError, match=message):
+        bind(*args, **kwargs)
+
+
+def test_variadic() -> None:
+    def g(*xs: int, **kw: float) -> None: ...
+
+    sig = Signature(g)
+    assert sig.bind([1, 2], {"a": 1}) == ([1, 2], {"a": 1.0})
+    with pytest.raises(TypeError, match="argument 'xs'"):
+        sig.bind([1, "2"], {})

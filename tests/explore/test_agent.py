@@ -1,0 +1,94 @@
+"""The agent: its map, messages (only what changed), regions (section III)."""
+
+from __future__ import annotations
+
+import msgpack
+import numpy as np
+
+from robots.explore import (
+    FREE,
+    OBSTACLE,
+    UNKNOWN,
+    ExplorerAgent,
+    make_policy,
+    make_team,
+    unexplored_in_view,
+    voronoi_partition,
+)
+from sim_hw.maze import generate_maze, visible_cells
+
+
+def test_voronoi_regions_cover_free_cells_without_overlap() -> None:
+    maze = generate_maze(30, 0.85, np.random.default_rng(5))
+    seeds = maze.starts[:6]
+    label = voronoi_partition(maze.grid == 0, seeds)
+    assert (label[maze.grid == 0] >= 0).all()  # every free cell has exactly one owner
+    assert (label[maze.grid == 1] == -1).all()
+    assert [label[s] for s in seeds] == list(range(6))
+    # the agents' own regions (from the initial map) partition the inner cells
+    team = make_team("cu-lvp", maze.shape, seeds, 1)
+    masks = np.array([a.in_region() for a in team]).reshape(6, *maze.shape)
+    assert (masks.sum(axis=0)[1:-1, 1:-1] == 1).all()
+    assert masks.sum(axis=0)[0].sum() == 0
+
+
+def test_voronoi_is_geodesic() -> None:
+    grid = np.ones((5, 7), dtype=bool)
+    grid[:, 3] = False
+    grid[4, 3] = True  # the wall has a gap at the bottom
+    label = voronoi_partition(grid, [(0, 2), (0, 4)])
+    assert label[0, 0] == 0
+    assert label[4, 2] == 0
+    assert label[0, 6] == 1
+    assert label[4, 3] == 0  # tie at the gap goes to the lower index
+
+
+def test_messages_carry_only_changes_and_merge() -> None:
+    grid = np.ones((9, 9), dtype=np.int8)
+    grid[1:-1, 1:-1] = 0
+    starts = [(2, 2), (6, 6)]
+    a, b = make_team("cu-lvp", grid.shape, starts, 3)
+    seen_a = visible_cells(grid, (2, 2))
+    inner_a = {(r, c) for r, c, _ in seen_a if 0 < r < 8 and 0 < c < 8}
+    a.observe(seen_cells=seen_a, position=(2, 2))
+    first = msgpack.unpackb(msgpack.packb(a.outgoing_message()))
+    assert len(first["free"]) // 2 == len(inner_a) == 12  # uint16 each; border known already
+    again = a.outgoing_message()
+    assert again["free"] == b""
+    assert again["obstacle"] == b""
+    b.observe(heard_messages=[first])
+    assert b.known[2, 2] == FREE
+    assert b.known[0, 0] == OBSTACLE
+    assert b.regions == frozenset({0, 1})  # regions merge when in range
+    assert b.peers[0].pos == a.pos
+    # b heard a newcomer: its next message is its whole map, so a catches up
+    seen_b = visible_cells(grid, (6, 6))
+    inner_b = {(r, c) for r, c, _ in seen_b if 0 < r < 8 and 0 < c < 8}
+    b.observe(seen_cells=seen_b, position=(6, 6))
+    full = b.outgoing_message()
+    assert len(full["free"]) // 2 == len(inner_a | inner_b) == 23
+    b.observe(heard_messages=[first])
+    assert b.outgoing_message()["free"] == b""
+
+
+def test_unexplored_in_view_counts_the_star() -> None:
+    known = np.full((7, 7), UNKNOWN, dtype=np.int8)
+    known[0], known[-1], known[:, 0], known[:, -1] = OBSTACLE, OBSTACLE, OBSTACLE, OBSTACLE
+    assert unexplored_in_view(known)[3, 3] == 16
+    known[3, 4] = OBSTACLE  # known, and blocks the right ray: (3, 5) not counted either
+    known[2, 3] = FREE  # seen, not counted; the ray goes on to (1, 3)
+    assert unexplored_in_view(known)[3, 3] == 13
+
+
+def test_agent_never_plans_into_a_known_obstacle() -> None:
+    grid = np.ones((7, 7), dtype=np.int8)
+    grid[1:-1, 1:-1] = 0
+    grid[3, 2:5] = 1
+    agent = ExplorerAgent(0, grid.shape, [(2, 3)], make_policy("nf"), np.random.default_rng(0))
+    for _ in range(30):
+        agent.observe(seen_cells=visible_cells(grid, agent.position), heard_messages=[])
+        dr, dc = agent.decide()
+        r, c = agent.position
+        assert grid[r + dr, c + dc] == 0
+        agent.observe(position=(r + dr, c + dc))
+    assert not (agent.known[1:-1, 1:-1] == UNKNOWN).any()

@@ -1,0 +1,79 @@
+"""Every method explores every reachable cell; runs are seeded; the runner's command line."""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+import numpy as np
+import pytest
+
+from programs.maze_experiment import register, run_trial
+from robots.explore import METHODS
+from sim_hw.maze import generate_maze, save_maze
+
+
+@pytest.mark.parametrize("method", list(METHODS))
+@pytest.mark.parametrize("p", [0.85, 0.15])
+def test_every_method_explores_every_reachable_cell(method: str, p: float) -> None:
+    for k in range(2):
+        maze = generate_maze(16, p, np.random.default_rng(100 + k), n_starts=4)
+        res = run_trial(maze, 1 + 2 * k, method, np.random.SeedSequence(k))
+        inner = (maze.shape[0] - 2) * (maze.shape[1] - 2)
+        assert res["complete"], (method, p, k)
+        assert res["explored"] == res["observable"] == inner
+        assert res["quality"] == 1.0
+
+
+@pytest.mark.parametrize("method", ["cu-lvp", "nf", "cu-bso", "hedac"])
+def test_same_seed_same_run(method: str) -> None:
+    maze = generate_maze(20, 0.85, np.random.default_rng(9), n_starts=6)
+    a = run_trial(maze, 6, method, np.random.SeedSequence(42))
+    b = run_trial(maze, 6, method, np.random.SeedSequence(42))
+    for key in ("step_ms", "time_s"):
+        a.pop(key), b.pop(key)
+    assert a == b
+
+
+def _parse(*argv: str) -> argparse.Namespace:
+    parser = argparse.ArgumentParser()
+    register(parser.add_subparsers(dest="cmd"))
+    return parser.parse_args(["maze", *argv])
+
+
+def test_runner_prints_tables_ranking_and_json(tmp_path, capsys) -> None:
+    args = _parse("--runs", "2", "--seed", "5", "--agents", "1,3", "--size", "12",
+                  "--methods", "cu-lvp,nf", "--out", str(tmp_path), "--json")
+    assert args.func(args) == 0
+    out, err = capsys.readouterr()
+    assert out.startswith("seed: 5\n")
+    assert "exploration rounds — obstacle probability 0.85" in out
+    assert "ranking:" in out
+    assert "[####" in err
+    data = json.loads(out.strip().splitlines()[-1])
+    assert len(data["runs"]) == 2 * 2 * 2 * 2
+    assert (tmp_path / "maze_metrics.png").stat().st_size > 0
+    assert (tmp_path / "maze_composite.png").exists()
+    again = _parse("--runs", "2", "--seed", "5", "--agents", "1,3", "--size", "12",
+                   "--methods", "cu-lvp,nf", "--no-plots", "--json")
+    again.func(again)
+    rerun = json.loads(capsys.readouterr()[0].strip().splitlines()[-1])
+    strip = [{k: v for k, v in r.items() if k not in ("step_ms", "time_s")}
+             for r in data["runs"]]
+    assert strip == [{k: v for k, v in r.items() if k not in ("step_ms", "time_s")}
+                     for r in rerun["runs"]]
+
+
+def test_runner_on_a_maze_file(tmp_path, capsys) -> None:
+    path = tmp_path / "m.json"
+    save_maze(path, generate_maze(12, 0.5, np.random.default_rng(2), n_starts=3))
+    args = _parse("--maze", str(path), "--runs", "1", "--agents", "3", "--seed", "1",
+                  "--methods", "cu-lvp", "--no-plots", "--json")
+    assert args.func(args) == 0
+    runs = json.loads(capsys.readouterr()[0].strip().splitlines()[-1])["runs"]
+    assert runs[0]["complete"]
+    assert runs[0]["agents"] == 3
+    assert runs[0]["p"] is None
+    bad = _parse("--maze", str(path), "--agents", "4", "--no-plots")
+    assert bad.func(bad) == 2
+    assert "3 starts" in capsys.readouterr()[1]

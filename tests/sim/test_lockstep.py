@@ -1,0 +1,91 @@
+"""The world's clock: lock-step determinism, dropping silent robots, real time."""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import time
+
+import numpy as np
+import pytest
+
+from sim_hw import RobotDropped, World, WorldServer, in_process, random_obstacles
+from sim_hw._walker import random_walk
+
+NOISY = {"sonar": {"noise": 0.02}, "odometry": {"trans_noise": 0.05, "drift": 0.02}}
+
+
+async def _run(seed: int, robots: int = 4, ticks: int = 150) -> list[list[list[float]]]:
+    spec = random_obstacles((6.0, 6.0), 6, np.random.default_rng(1))
+    server = WorldServer(World(spec, seed=seed), expect=robots)
+
+    async def robot(i: int) -> list[list[float]]:
+        hw = await in_process(server, f"r{i}", NOISY)
+        return await random_walk(hw, np.random.default_rng(100 + i), ticks)
+
+    # start the robots in a scrambled order: joins are admitted in id order anyway
+    order = [2, 0, 3, 1][:robots]
+    tracks = await asyncio.gather(*(robot(i) for i in order))
+    await server.aclose()
+    return [tracks[order.index(i)] for i in range(robots)]
+
+
+async def test_same_seed_same_trajectories() -> None:
+    first, second = await _run(seed=5), await _run(seed=5)
+    assert first == second  # bit for bit
+    assert first[0][0] != first[0][-1]  # they did move
+
+
+async def test_a_silent_robot_is_dropped(caplog: pytest.LogCaptureFixture) -> None:
+    server = WorldServer(World(random_obstacles((6.0, 6.0), 0)), expect=2, timeout=0.2)
+    live, silent = await asyncio.gather(in_process(server, "live"), in_process(server, "silent"))
+    del silent  # never ticks, as a killed process would not
+    caplog.set_level(logging.WARNING, logger="sim_hw.server")
+    start = time.monotonic()
+    live.drive.set_velocity(0.2, 0.0)
+    await asyncio.wait_for(live.clock.sleep(1.0), timeout=5.0)
+    assert time.monotonic() - start < 2.0
+    assert server.dropped == ["silent"]
+    assert "robot silent sent no command for tick 0 within 0.2 s: dropped" in caplog.text
+    assert set(server.world.robots) == {"live"}
+    await server.aclose()
+
+
+async def test_a_dropped_robot_is_told() -> None:
+    server = WorldServer(World(random_obstacles((6.0, 6.0), 0)), expect=1)
+    hw = await in_process(server, "r")
+    await server.leave("r")
+    with pytest.raises(RobotDropped):
+        await hw.clock.tick()
+
+
+async def test_concurrent_waiters_share_one_tick() -> None:
+    server = WorldServer(World(random_obstacles((6.0, 6.0), 0)), expect=1)
+    hw = await in_process(server, "r")
+    await asyncio.gather(hw.clock.tick(), hw.clock.tick(), hw.clock.tick())
+    assert server.world.tick == 1
+    await server.aclose()
+
+
+async def test_real_time_runs_at_the_speed_factor() -> None:
+    server = WorldServer(World(random_obstacles((6.0, 6.0), 0)), lockstep=False, speed=20.0)
+    hw = await in_process(server, "r")
+    start = time.monotonic()
+    await hw.clock.sleep(2.0)  # 2 s simulated at 20× ≈ 0.1 s
+    elapsed = time.monotonic() - start
+    assert 0.08 <= elapsed < 1.0
+    assert hw.clock.now() == pytest.approx(2.0, abs=0.15)
+    await server.aclose()
+
+
+async def test_late_joiner_enters_at_a_tick_boundary() -> None:
+    server = WorldServer(World(random_obstacles((6.0, 6.0), 0)), expect=1)
+    a = await in_process(server, "a")
+    await a.clock.tick()
+    joining = asyncio.ensure_future(in_process(server, "b"))
+    await a.clock.tick()
+    b = await joining
+    assert b.clock.now() == a.clock.now() == pytest.approx(0.2)
+    await asyncio.gather(a.clock.tick(), b.clock.tick())
+    assert server.world.tick == 3
+    await server.aclose()

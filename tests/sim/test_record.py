@@ -1,0 +1,74 @@
+"""Recording a run, drawing it with ``mover replay``, and the CLI's errors."""
+
+from __future__ import annotations
+
+import asyncio
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mover._cli import main
+from sim_hw import (
+    Recorder,
+    World,
+    WorldServer,
+    in_process,
+    load_world,
+    read_recording,
+)
+from sim_hw._walker import random_walk
+
+WORLDS = Path(__file__).parents[2] / "worlds"
+
+
+async def _record(path: Path) -> World:
+    world = World(load_world(WORLDS / "search_rescue.toml"), seed=2)
+    recorder = Recorder(path, world)
+    snapshots: list[dict] = []
+    server = WorldServer(
+        world, expect=2, on_tick=recorder, snapshot_every=5, on_snapshot=snapshots.append
+    )
+
+    async def robot(rid: str, seed: int) -> None:
+        hw = await in_process(server, rid)
+        await random_walk(hw, np.random.default_rng(seed), 50)
+
+    await asyncio.gather(robot("ernst", 1), robot("moseley", 2))
+    await server.aclose()
+    recorder.close()
+    assert [s["tick"] for s in snapshots] == list(range(5, 51, 5))
+    assert set(snapshots[0]["robots"]) == {"ernst", "moseley"}
+    return world
+
+
+async def test_recording_and_replay(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    rec = tmp_path / "run.jsonl"
+    await _record(rec)
+    header, ticks = read_recording(rec)
+    assert header["size"] == [12.0, 9.0]
+    assert len(ticks) == 51  # the start and 50 ticks
+    assert ticks[-1]["robots"]["ernst"][:2] != ticks[1]["robots"]["ernst"][:2]
+    assert set(ticks[1]["commands"]) == {"ernst", "moseley"}
+    png = tmp_path / "run.png"
+    assert main(["replay", str(rec), "--out", str(png)]) == 0
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_replay_errors(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    assert main(["replay", str(tmp_path / "none.jsonl"), "--out", "x.png"]) == 2
+    assert "no such file" in capsys.readouterr().err
+    junk = tmp_path / "junk.jsonl"
+    junk.write_text('{"type": "tick"}\n')
+    assert main(["replay", str(junk), "--out", str(tmp_path / "x.png")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert "no header line" in err
+
+
+def test_world_rejects_a_bad_file(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[world]\nsize = [10, -1]\n")
+    assert main(["world", str(bad), "--lockstep"]) == 2
+    err = capsys.readouterr().err
+    assert err.strip() == f"mover world: {bad}: world.size: must be positive, got [10, -1]"

@@ -1,0 +1,158 @@
+"""The remote backend: real OS processes over zenoh on 127.0.0.1 (multicast scouting off).
+
+A world process (``mover world --lockstep``) and robot processes (``python -m sim_hw._walker``)
+on free ports; the same walkers in process must give the same trajectories, bit for bit.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import os
+import signal
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mover import Team, free_port
+from sim_hw import World, WorldServer, in_process, load_world
+from sim_hw._walker import random_walk
+
+pytestmark = pytest.mark.timeout(90)
+
+ROOT = Path(__file__).resolve().parents[2]
+WORLD = """
+[generator]
+kind = "random_obstacles"
+size = [6.0, 6.0]
+count = 6
+seed = 1
+"""
+SPEC = {"sonar": {"noise": 0.02}, "odometry": {"trans_noise": 0.05}}
+
+
+class Procs:
+    """Processes of one test on one seed port; all killed at the end."""
+
+    def __init__(self) -> None:
+        self.team = Team.generate("simtest")
+        self.port = free_port()
+        self.procs: list[asyncio.subprocess.Process] = []
+
+    def env(self, listen: bool) -> dict[str, str]:
+        env = dict(os.environ)
+        env.update(self.team.env())
+        env["MOVER_MODE"] = "peer"
+        seed = f"tcp/127.0.0.1:{self.port}"
+        env["MOVER_LISTEN"] = seed if listen else "tcp/127.0.0.1:0"
+        env["MOVER_CONNECT"] = "" if listen else seed
+        return env
+
+    async def start(self, *args: str, world: bool = False) -> asyncio.subprocess.Process:
+        proc = await asyncio.create_subprocess_exec(
+            sys.executable,
+            *args,
+            env=self.env(listen=world),
+            cwd=ROOT,
+            stdout=asyncio.subprocess.PIPE,
+            stderr=asyncio.subprocess.PIPE,
+        )
+        self.procs.append(proc)
+        return proc
+
+    async def world(self, path: Path, *flags: str) -> asyncio.subprocess.Process:
+        return await self.start(
+            "-m",
+            "mover._cli",
+            "world",
+            str(path),
+            "--lockstep",
+            "--quit-when-empty",
+            "--state-rate",
+            "0",
+            *flags,
+            world=True,
+        )
+
+    async def walker(self, robot: str, seed: int, ticks: int, out: Path):
+        return await self.start(
+            "-m",
+            "sim_hw._walker",
+            robot,
+            "--seed",
+            str(seed),
+            "--ticks",
+            str(ticks),
+            "--spec",
+            json.dumps(SPEC),
+            "--out",
+            str(out),
+        )
+
+    def kill_all(self) -> None:
+        for proc in self.procs:
+            if proc.returncode is None:
+                proc.kill()
+
+
+@pytest.fixture
+def procs():
+    p = Procs()
+    yield p
+    p.kill_all()
+
+
+async def _finish(proc: asyncio.subprocess.Process, limit: float = 60.0) -> tuple[int, str]:
+    _, err = await asyncio.wait_for(proc.communicate(), limit)
+    return proc.returncode or 0, err.decode()
+
+
+async def _in_process(path: Path, seed: int, walkers: dict[str, int], ticks: int):
+    server = WorldServer(World(load_world(path), seed=seed), expect=len(walkers))
+
+    async def walk(robot: str, rng_seed: int):
+        hw = await in_process(server, robot, SPEC)
+        return await random_walk(hw, np.random.default_rng(rng_seed), ticks)
+
+    tracks = await asyncio.gather(*(walk(r, s) for r, s in walkers.items()))
+    await server.aclose()
+    return dict(zip(walkers, tracks, strict=True))
+
+
+async def test_remote_and_in_process_give_the_same_trajectories(procs: Procs, tmp_path: Path):
+    path = tmp_path / "field.toml"
+    path.write_text(WORLD)
+    walkers, ticks = {"r0": 100, "r1": 101}, 80
+    world = await procs.world(path, "--expect", "2", "--seed", "5")
+    robots = [await procs.walker(r, s, ticks, tmp_path / f"{r}.json") for r, s in walkers.items()]
+    for proc in robots:
+        code, err = await _finish(proc)
+        assert code == 0, err
+    code, err = await _finish(world)
+    assert code == 0, err
+    remote = {r: json.loads((tmp_path / f"{r}.json").read_text()) for r in walkers}
+    local = await _in_process(path, 5, walkers, ticks)
+    assert len(remote["r0"]) == ticks
+    assert remote == local
+
+
+async def test_a_killed_robot_does_not_hang_the_world(procs: Procs, tmp_path: Path) -> None:
+    path = tmp_path / "field.toml"
+    path.write_text(WORLD)
+    world = await procs.world(path, "--expect", "2", "--timeout", "1")
+    steady = await procs.walker("steady", 1, 100, tmp_path / "steady.json")
+    doomed = await procs.walker("doomed", 2, 10**6, tmp_path / "doomed.json")
+    assert doomed.stdout is not None
+    line = await asyncio.wait_for(doomed.stdout.readline(), 30)
+    assert line.strip() == b"READY"
+    await asyncio.sleep(0.5)
+    doomed.send_signal(signal.SIGKILL)
+    code, err = await _finish(steady)
+    assert code == 0, err
+    code, err = await _finish(world)
+    assert code == 0, err
+    assert "robot doomed" in err
+    assert "dropped" in err
+    assert len(json.loads((tmp_path / "steady.json").read_text())) == 100
