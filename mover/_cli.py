@@ -32,7 +32,7 @@ def build_parser() -> argparse.ArgumentParser:
         try:
             ep.load()(sub)
         except Exception as exc:  # one broken verb must not take the others down
-            log.debug("verb %r is unavailable: %s", ep.name, exc)
+            print(f"mover: verb {ep.name!r} is unavailable: {exc}", file=sys.stderr)
     return parser
 
 
@@ -52,5 +52,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     return int(code or 0)
 
 
-if __name__ == "__main__":
-    sys.exit(main())
+if __name__ == "__main__":  # python -m mover._cli: use the package's module, not __main__'s
+    from mover._cli import main as _main
+
+    sys.exit(_main())

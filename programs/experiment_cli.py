@@ -22,4 +22,4 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         try:
             ep.load()(runners)
         except Exception as exc:  # a broken runner must not break the others
-            log.warning("experiment %r is unavailable: %s", ep.name, exc)
+            log.debug("experiment %r is unavailable: %s", ep.name, exc)

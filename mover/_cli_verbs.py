@@ -1,0 +1,184 @@
+"""The `mover ps`, `mover call` and `mover keygen` verbs.
+
+Team and transport come from ``--team`` and the MOVER_* environment (see ``mover._config``);
+``--connect`` adds endpoints to reach the team.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import json
+import secrets
+import sys
+from typing import TYPE_CHECKING, Any
+
+from ._cli import UsageError
+from ._config import NodeConfig, Team
+from ._exceptions import CallError
+from ._keys import check_name
+
+if TYPE_CHECKING:
+    Sub = argparse._SubParsersAction[argparse.ArgumentParser]
+
+
+def _team_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--team", help="team name (default: $MOVER_TEAM); the key comes from "
+                   "$MOVER_TEAM_KEY or $MOVER_TEAM_KEY_FILE")
+    p.add_argument("--connect", action="append", metavar="ENDPOINT",
+                   help="zenoh endpoint of a team member or router; repeatable")
+    p.add_argument("--wait", type=float, default=2.0, metavar="S",
+                   help="seconds to wait for the team to be discovered (default 2)")
+
+
+def _open(args: argparse.Namespace) -> tuple[Team, NodeConfig]:
+    try:
+        team = Team.from_env(args.team)
+        config = NodeConfig.from_env()
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    if args.connect:
+        config = NodeConfig(mode=config.mode, listen=config.listen,
+                            connect=config.connect + tuple(args.connect),
+                            overrides=config.overrides)
+    return team, config
+
+
+# -- ps -------------------------------------------------------------------------------------------
+
+
+def register_ps(sub: Sub) -> None:
+    """Add ``mover ps``."""
+    p = sub.add_parser("ps", help="list the live members of a team")
+    _team_options(p)
+    p.add_argument("--json", action="store_true", help="one JSON object per member")
+    p.set_defaults(func=run_ps)
+
+
+def run_ps(args: argparse.Namespace) -> int:
+    team, config = _open(args)
+    return asyncio.run(_ps(team, config, args))
+
+
+async def _ps(team: Team, config: NodeConfig, args: argparse.Namespace) -> int:
+    from ._node import Node
+
+    async with Node(f"ps-{secrets.token_hex(3)}", team, kind="tool", config=config,
+                    observer=True) as node:
+        await asyncio.sleep(args.wait)
+        infos = [node.team.info(n) for n in sorted(node.team.members())]
+    rows = [i for i in infos if i is not None]
+    if args.json:
+        for i in rows:
+            print(json.dumps({"name": i.name, "kind": i.kind, "uptime_s": round(i.uptime, 1),
+                              "pid": i.pid, "host": i.host}))
+        return 0
+    if not rows:
+        print(f"no members of team {team.name!r} seen within {args.wait} s", file=sys.stderr)
+        return 1
+    print(f"{'NAME':<16} {'KIND':<12} {'UPTIME':>10} {'PID':>8}  HOST")
+    for i in rows:
+        print(f"{i.name:<16} {i.kind:<12} {_duration(i.uptime):>10} {i.pid:>8}  {i.host}")
+    return 0
+
+
+def _duration(seconds: float) -> str:
+    s = int(seconds)
+    return f"{s // 3600}h{s % 3600 // 60:02d}m" if s >= 3600 else f"{s // 60}m{s % 60:02d}s"
+
+
+# -- call -----------------------------------------------------------------------------------------
+
+
+def register_call(sub: Sub) -> None:
+    """Add ``mover call``."""
+    p = sub.add_parser("call", help="call a robot's exported procedure",
+                       description="Arguments are JSON values: 3, 1.5, '\"text\"', '[1, 2]'.")
+    p.add_argument("robot")
+    p.add_argument("procedure")
+    p.add_argument("args", nargs="*", metavar="JSON", help="positional arguments, each JSON")
+    p.add_argument("--kwargs", metavar="JSON", help="keyword arguments as a JSON object")
+    p.add_argument("--timeout", type=float, default=10.0, help="seconds (default 10)")
+    _team_options(p)
+    p.set_defaults(func=run_call)
+
+
+def run_call(args: argparse.Namespace) -> int:
+    try:
+        check_name("robot", args.robot)
+        check_name("procedure", args.procedure)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    positional = [_json(a, f"argument {i + 1}") for i, a in enumerate(args.args)]
+    kwargs = _json(args.kwargs, "--kwargs") if args.kwargs else {}
+    if not isinstance(kwargs, dict):
+        raise UsageError("--kwargs must be a JSON object")
+    team, config = _open(args)
+    return asyncio.run(_call(team, config, args, positional, kwargs))
+
+
+def _json(text: str, what: str) -> Any:
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise UsageError(f"{what} is not JSON ({exc.msg}): {text!r}; quote strings as "
+                         "'\"text\"'") from None
+
+
+async def _call(team: Team, config: NodeConfig, args: argparse.Namespace,
+                positional: list[Any], kwargs: dict[str, Any]) -> int:
+    from ._node import Node
+
+    async with Node(f"cli-{secrets.token_hex(3)}", team, kind="tool", config=config,
+                    observer=True) as node:
+        try:
+            await node.team.wait_for({args.robot}, timeout=args.wait)
+        except TimeoutError:
+            seen = ", ".join(sorted(node.team.members())) or "none"
+            print(f"mover call: no member {args.robot!r} in team {team.name!r} "
+                  f"(members seen: {seen})", file=sys.stderr)
+            return 1
+        try:
+            result = await node.call(args.robot, args.procedure, *positional,
+                                     timeout=args.timeout, **kwargs)
+        except CallError as exc:
+            print(f"mover call: {type(exc).__name__}: {exc}", file=sys.stderr)
+            return 1
+    print(json.dumps(result, default=_plain))
+    return 0
+
+
+def _plain(value: Any) -> Any:
+    if hasattr(value, "tolist"):
+        return value.tolist()
+    if isinstance(value, bytes):
+        return value.hex()
+    raise TypeError(f"cannot show a {type(value).__name__}")
+
+
+# -- keygen ---------------------------------------------------------------------------------------
+
+
+def register_keygen(sub: Sub) -> None:
+    """Add ``mover keygen``."""
+    p = sub.add_parser("keygen", help="make a new team key")
+    p.add_argument("--team", required=True)
+    p.add_argument("--out", metavar="FILE", help="write the key (hex) to FILE, mode 600")
+    p.set_defaults(func=run_keygen)
+
+
+def run_keygen(args: argparse.Namespace) -> int:
+    try:
+        team = Team.generate(args.team)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    if args.out:
+        import os
+
+        fd = os.open(args.out, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+        with os.fdopen(fd, "w") as f:
+            f.write(team.key.hex() + "\n")
+        print(f"export MOVER_TEAM={team.name} MOVER_TEAM_KEY_FILE={args.out}")
+    else:
+        print(f"export MOVER_TEAM={team.name} MOVER_TEAM_KEY={team.key.hex()}")
+    return 0

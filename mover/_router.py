@@ -1,0 +1,189 @@
+"""`mover router`: a zenoh router for multi-machine teams, and the config to secure it.
+
+A router is a Python zenoh session in router mode (no separate binary). ``--gen-config DIR``
+writes, for one team, a certificate authority, a router certificate and one client certificate
+per member (common name = member name), ``router.json`` (TLS listener, mutual TLS, and an
+access-control list that lets only the team's certificates touch ``mover/<team>/**``) and
+``member-<name>.json`` for each member (client mode, connecting over mutual TLS). A robot process
+uses its file through ``MOVER_ZENOH_CONFIG``; the team key (envelope signatures) still applies on
+top, so a member whose certificate leaks still cannot forge team messages.
+
+Note (ZENOH-NOTES): an ACL applies only in the node that has it. Robots behind the router should
+run as clients (``MOVER_MODE=client``) and listen on nothing, so that no outsider can link to them
+directly and bypass the router.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import ipaddress
+import json
+import signal
+import threading
+from pathlib import Path
+from typing import Any
+
+from ._config import NodeConfig, _read_overrides
+from ._keys import check_name
+
+# Every message kind a team member needs on the team's keys.
+_TEAM_MESSAGES = [
+    "put", "delete", "declare_subscriber", "query", "declare_queryable", "reply",
+    "liveliness_token", "liveliness_query", "declare_liveliness_subscriber",
+]
+
+
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    """Add the ``router`` verb."""
+    p = sub.add_parser("router", help="run a zenoh router, or write a secured config for one",
+                       description=__doc__.split("\n\n")[0])
+    p.add_argument("--listen", action="append", metavar="ENDPOINT",
+                   help="endpoint to listen on (default tcp/0.0.0.0:7447); repeatable")
+    p.add_argument("--config", metavar="FILE", help="a JSON settings file (e.g. router.json)")
+    p.add_argument("--gen-config", metavar="DIR", help="write certificates and configs to DIR")
+    p.add_argument("--team", help="team name (with --gen-config)")
+    p.add_argument("--members", help="comma-separated member names (with --gen-config)")
+    p.add_argument("--host", default="127.0.0.1",
+                   help="router address the members connect to (with --gen-config)")
+    p.add_argument("--port", type=int, default=7448, help="TLS port (with --gen-config)")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from ._cli import UsageError
+
+    if args.gen_config:
+        if not args.team or not args.members:
+            raise UsageError("--gen-config needs --team and --members")
+        try:
+            check_name("team", args.team)
+            members = [check_name("member", m) for m in args.members.split(",") if m]
+        except ValueError as exc:
+            raise UsageError(str(exc)) from None
+        written = generate_config(Path(args.gen_config), args.team, members, args.host, args.port)
+        for path in written:
+            print(path)
+        return 0
+    overrides: dict[str, Any] = {}
+    if args.config:
+        try:
+            overrides = _read_overrides(args.config)
+        except ValueError as exc:
+            raise UsageError(str(exc)) from None
+    listen = tuple(args.listen or ()) or (
+        () if "listen/endpoints" in overrides else ("tcp/0.0.0.0:7447",))
+    config = NodeConfig(mode="router", listen=listen, overrides=overrides)
+    serve(config)
+    return 0
+
+
+def serve(config: NodeConfig) -> None:
+    """Run a router until SIGINT or SIGTERM."""
+    import zenoh
+
+    stop = threading.Event()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: stop.set())
+    with zenoh.open(config.to_zenoh()) as session:
+        print(f"router {session.zid()} listening on {', '.join(config.listen) or 'config'}",
+              flush=True)
+        stop.wait()
+
+
+def generate_config(directory: Path, team: str, members: list[str], host: str,
+                    port: int) -> list[Path]:
+    """Write a CA, certificates and router/member configs for ``team``; return the files."""
+    directory.mkdir(parents=True, exist_ok=True)
+    ca_key, ca_cert = _certificate(f"mover {team} CA", None, host, ca=True)
+    files = {"ca.pem": _pem(ca_cert)}
+    r_key, r_cert = _certificate("router", (ca_key, ca_cert), host)
+    files["router-cert.pem"], files["router-key.pem"] = _pem(r_cert), _pem(r_key)
+    for member in members:
+        m_key, m_cert = _certificate(member, (ca_key, ca_cert), host)
+        files[f"{member}-cert.pem"], files[f"{member}-key.pem"] = _pem(m_cert), _pem(m_key)
+    written = []
+    for name, data in files.items():
+        path = directory / name
+        path.write_bytes(data)
+        if name.endswith("-key.pem"):
+            path.chmod(0o600)
+        written.append(path)
+    d = directory.resolve()
+    router = {
+        "listen/endpoints": [f"tls/{host}:{port}"],
+        "transport/link/tls": {
+            "root_ca_certificate": str(d / "ca.pem"),
+            "listen_certificate": str(d / "router-cert.pem"),
+            "listen_private_key": str(d / "router-key.pem"),
+            "enable_mtls": True,
+        },
+        "access_control": {
+            "enabled": True,
+            "default_permission": "deny",
+            "rules": [{
+                "id": "team", "messages": _TEAM_MESSAGES, "flows": ["ingress", "egress"],
+                "permission": "allow", "key_exprs": [f"mover/{team}/**"],
+            }],
+            "subjects": [{"id": "members", "cert_common_names": members}],
+            "policies": [{"id": "team", "rules": ["team"], "subjects": ["members"]}],
+        },
+    }
+    (directory / "router.json").write_text(json.dumps(router, indent=2))
+    written.append(directory / "router.json")
+    for member in members:
+        client = {
+            "connect/endpoints": [f"tls/{host}:{port}"],
+            "listen/endpoints": [],
+            "transport/link/tls": {
+                "root_ca_certificate": str(d / "ca.pem"),
+                "connect_certificate": str(d / f"{member}-cert.pem"),
+                "connect_private_key": str(d / f"{member}-key.pem"),
+                "enable_mtls": True,
+            },
+        }
+        path = directory / f"member-{member}.json"
+        path.write_text(json.dumps(client, indent=2))
+        written.append(path)
+    return written
+
+
+def _certificate(common_name: str, issuer: tuple[Any, Any] | None, host: str,
+                 ca: bool = False) -> tuple[Any, Any]:
+    from cryptography import x509
+    from cryptography.hazmat.primitives import hashes
+    from cryptography.hazmat.primitives.asymmetric import ec
+    from cryptography.x509.oid import NameOID
+
+    key = ec.generate_private_key(ec.SECP256R1())
+    name = x509.Name([x509.NameAttribute(NameOID.COMMON_NAME, common_name)])
+    issuer_key, issuer_cert = issuer if issuer else (key, None)
+    now = datetime.datetime.now(datetime.UTC)
+    try:
+        alt: x509.GeneralName = x509.IPAddress(ipaddress.ip_address(host))
+    except ValueError:
+        alt = x509.DNSName(host)
+    builder = (
+        x509.CertificateBuilder()
+        .subject_name(name)
+        .issuer_name(issuer_cert.subject if issuer_cert else name)
+        .public_key(key.public_key())
+        .serial_number(x509.random_serial_number())
+        .not_valid_before(now - datetime.timedelta(minutes=5))
+        .not_valid_after(now + datetime.timedelta(days=365))
+        .add_extension(x509.BasicConstraints(ca=ca, path_length=None), critical=True)
+    )
+    if not ca:
+        builder = builder.add_extension(
+            x509.SubjectAlternativeName([alt, x509.DNSName("localhost")]), critical=False)
+    return key, builder.sign(issuer_key, hashes.SHA256())
+
+
+def _pem(obj: Any) -> bytes:
+    from cryptography.hazmat.primitives import serialization
+
+    if hasattr(obj, "private_bytes"):
+        return bytes(obj.private_bytes(serialization.Encoding.PEM,
+                                       serialization.PrivateFormat.PKCS8,
+                                       serialization.NoEncryption()))
+    return bytes(obj.public_bytes(serialization.Encoding.PEM))
