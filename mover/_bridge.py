@@ -12,6 +12,7 @@ loop's exception handler.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import logging
 from collections import deque
 from collections.abc import Callable
@@ -106,10 +107,8 @@ async def run_blocking(fn: Callable[[], Any]) -> Any:
             outcome: tuple[bool, Any] = (True, fn())
         except BaseException as exc:
             outcome = (False, exc)
-        try:
+        with contextlib.suppress(RuntimeError):  # the loop is gone
             loop.call_soon_threadsafe(settle, outcome)
-        except RuntimeError:  # the loop is gone
-            pass
 
     thread = threading.Thread(target=work, name="mover-blocking", daemon=True)
     thread.start()

@@ -102,7 +102,7 @@ class Node:
         self._flush_scheduled = False
         self._declared: list[Any] = []
         self._session: Any = None
-        self._portal: Portal | None = None  # type: ignore[assignment]
+        self._portal: Portal = None  # type: ignore[assignment]  # set by open()
         self.team: Membership = Membership(self)
 
     @property

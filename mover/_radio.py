@@ -103,7 +103,7 @@ class Subscription:
         return items
 
     async def get(self, timeout: float | None = None) -> Message:
-        """The next message; TimeoutError after ``timeout`` seconds, StopAsyncIteration if closed."""
+        """The next message; TimeoutError after ``timeout`` s, StopAsyncIteration if closed."""
         async with asyncio.timeout(timeout):
             while not self._items:
                 if self._closed:

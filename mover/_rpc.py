@@ -138,7 +138,9 @@ class RpcServer:
             return
         self._send(query, env, {"ok": result})
 
-    def _prepare(self, env: Envelope) -> dict[str, Any] | tuple[Exported, list[Any], dict[str, Any]]:
+    def _prepare(
+        self, env: Envelope
+    ) -> dict[str, Any] | tuple[Exported, list[Any], dict[str, Any]]:
         """The procedure and its checked arguments, or the error to reply with."""
         payload = env.payload
         if not (isinstance(payload, list) and len(payload) == 3 and isinstance(payload[0], str)

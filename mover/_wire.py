@@ -9,7 +9,9 @@ unsigned frame ``b"MR" + reason`` (UTF-8).
 
 numpy arrays travel as msgpack extension type 1 whose data is::
 
-    u8 len(dtype) | dtype.str (ASCII, e.g. "<f8") | u8 ndim | ndim x u64 LE shape | raw C-order bytes
+    u8 len(dtype) | dtype.str (ASCII, e.g. "<f8") | u8 ndim | ndim x u64 LE shape | raw bytes
+
+(the raw bytes in C order).
 
 Only numeric and boolean dtypes are carried (no object arrays: nothing is ever unpickled).
 Tuples arrive as lists.

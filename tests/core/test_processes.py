@@ -29,7 +29,6 @@ from mover import (
     FixedLocator,
     Node,
     PayloadTooLarge,
-    Refused,
     RemoteError,
     RobotLost,
     Team,
@@ -46,15 +45,14 @@ POSITIONS = {"r1": (0.0, 0.0, 0.0), "r2": (3.0, 4.0, math.pi / 2), "r3": (6.0, 8
 
 @pytest_asyncio.fixture(scope="module", loop_scope="module")
 async def world() -> AsyncIterator[tuple[Cluster, Node]]:
-    async with cluster() as c:
-        async with Node("tester", c.team, kind="test", config=c.seed,
-                        locator=FixedLocator(100.0, 100.0)) as node:
-            await asyncio.gather(*(
-                c.robot(name, "--x", str(x), "--y", str(y), "--heading", str(h))
-                for name, (x, y, h) in POSITIONS.items()
-            ))
-            await node.team.wait_for(POSITIONS, timeout=10)
-            yield c, node
+    async with cluster() as c, Node("tester", c.team, kind="test", config=c.seed,
+                    locator=FixedLocator(100.0, 100.0)) as node:
+        await asyncio.gather(*(
+            c.robot(name, "--x", str(x), "--y", str(y), "--heading", str(h))
+            for name, (x, y, h) in POSITIONS.items()
+        ))
+        await node.team.wait_for(POSITIONS, timeout=10)
+        yield c, node
 
 
 async def test_rpc_across_processes(world: tuple[Cluster, Node]) -> None:

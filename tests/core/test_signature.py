@@ -48,7 +48,9 @@ def test_good_arguments_pass_and_ints_become_floats() -> None:
         ((1, 1.0), {"z": 1}, "unexpected keyword argument 'z'"),
     ],
 )
-def test_bad_arguments_are_named(args: tuple[Any, ...], kwargs: dict[str, Any], message: str) -> None:
+def test_bad_arguments_are_named(
+    args: tuple[Any, ...], kwargs: dict[str, Any], message: str
+) -> None:
     with pytest.raises(TypeError, match=message):
         bind(*args, **kwargs)
 

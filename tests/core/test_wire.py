@@ -54,7 +54,8 @@ def test_malformed_input_raises_wire_error() -> None:
 def test_seal_and_open() -> None:
     frame = Sealer("alpha", "ernst", KEY).seal("call", ["add", [1, 2], {}], 7)
     env = Opener("alpha", KEY).open(frame)
-    assert (env.sender, env.kind, env.call_id, env.payload) == ("ernst", "call", 7, ["add", [1, 2], {}])
+    assert (env.sender, env.kind, env.call_id) == ("ernst", "call", 7)
+    assert env.payload == ["add", [1, 2], {}]
 
 
 def test_wrong_key_or_team_is_refused() -> None:

@@ -61,7 +61,9 @@ class Cluster:
                 if line.startswith(ready):
                     return proc
 
-    async def robot(self, name: str, *extra: str, team: Team | None = None) -> asyncio.subprocess.Process:
+    async def robot(
+        self, name: str, *extra: str, team: Team | None = None
+    ) -> asyncio.subprocess.Process:
         """Start a test robot (tests/helpers/robot_proc.py)."""
         return await self.start("tests.helpers.robot_proc", "--name", name, *extra, team=team)
 

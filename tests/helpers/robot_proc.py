@@ -89,5 +89,5 @@ if __name__ == "__main__":
     p.add_argument("--y", type=float, default=0.0)
     p.add_argument("--heading", type=float, default=0.0)
     p.add_argument("--max-size", type=int, default=4 * 1024 * 1024)
-    logging.basicConfig(level=logging.INFO, format=f"%(name)s %(levelname)s %(message)s")
+    logging.basicConfig(level=logging.INFO, format="%(name)s %(levelname)s %(message)s")
     asyncio.run(main(p.parse_args()))
