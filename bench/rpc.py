@@ -29,7 +29,7 @@ import zenoh
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from mover import FixedLocator, Node, NodeConfig, Team, free_port  # noqa: E402
+from mover import FixedLocator, Node, NodeConfig, Team, free_port
 
 RAW_KEY = "bench/raw/echo"
 FLOOD_KEY = "bench/raw/flood"
@@ -188,7 +188,7 @@ async def measure_flood(node: Node, env: dict[str, str], mode: str, receivers: i
                 if mode == "raw":
                     publisher.put(payload)
                 else:
-                    node.broadcast("flood", payload, range=10.0, reliable=True)
+                    node.broadcast_nowait("flood", payload, range=10.0, reliable=True)
             sent += 200
             await asyncio.sleep(0)
         publisher.undeclare()

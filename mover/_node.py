@@ -209,7 +209,13 @@ class Node:
 
     # -- broadcasts -----------------------------------------------------------------------------
 
-    def broadcast(
+    async def broadcast(
+        self, topic: str, data: Any, *, range: float | None = None, reliable: bool = False
+    ) -> None:
+        """Send ``data`` on ``topic`` to members within ``range`` metres (see the nowait form)."""
+        self.broadcast_nowait(topic, data, range=range, reliable=reliable)
+
+    def broadcast_nowait(
         self, topic: str, data: Any, *, range: float | None = None, reliable: bool = False
     ) -> None:
         """Send ``data`` on ``topic`` to the members within ``range`` metres of this node now.

@@ -78,7 +78,7 @@ async def test_subscription_iterates_and_closes() -> None:
         await a.team.wait_for({"b"}, timeout=10)
         await asyncio.sleep(0.3)
         for i in range(3):
-            a.broadcast("t/x", i, reliable=True)
+            await a.broadcast("t/x", i, reliable=True)
         got = [(await sub.get(timeout=5)).data for _ in range(3)]
         assert got == [0, 1, 2]
         sub.close()

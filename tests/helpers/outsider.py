@@ -24,7 +24,7 @@ async def main(target: str) -> None:
                 print("refused:", type(exc).__name__, exc, flush=True)
         # A broadcast on the team's key (mover/alpha/...), signed with the wrong key.
         node._sealer.team = "alpha"
-        node.broadcast("chatter", "forged", range=None)
+        await node.broadcast("chatter", "forged", range=None)
         await asyncio.sleep(0.3)
     print("DONE", flush=True)
 

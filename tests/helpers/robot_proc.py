@@ -52,7 +52,7 @@ async def main(args: argparse.Namespace) -> None:
             return state["bumps"]
 
         def send(topic: str, data: Any, range: float | None = None) -> None:
-            node.broadcast(topic, data, range=range)
+            node.broadcast_nowait(topic, data, range=range)
 
         def heard_on(topic: str) -> list[list[Any]]:
             return heard[topic]
