@@ -1,8 +1,9 @@
 """mover: program a team of mobile robots as one distributed program.
 
 The public face of the middleware: a :class:`Node` per process (RPC, range-limited broadcasts,
-liveliness and team membership over Eclipse Zenoh), the :class:`Team` and its key, and the
-errors. Everything else lives in private modules.
+liveliness and team membership over Eclipse Zenoh), the :class:`Team` and its key, the
+collectives (:class:`TaskTeam` with ``distributed_or`` / ``distributed_and``), programs
+(:class:`ProgramHost`, :func:`launch`) and the errors. Everything else lives in private modules.
 """
 
 from ._config import NodeConfig, Team, free_port
@@ -23,14 +24,17 @@ from ._exceptions import (
 )
 from ._membership import MemberEvent, MemberInfo, Membership
 from ._node import Node
+from ._programs import ProgramHost, RunTeam, launch
 from ._radio import FixedLocator, Locator, Message, Neighbour, RadioModel, Subscription
 from ._rpc import procedure
+from ._tasks import Collectives, OperationFailed, Outcome, StepMetrics, TaskTeam
 from ._wire import pack, unpack
 
 __all__ = [
     "BadArguments",
     "CallError",
     "CallTimeout",
+    "Collectives",
     "FixedLocator",
     "Locator",
     "MemberEvent",
@@ -43,17 +47,24 @@ __all__ = [
     "Node",
     "NodeClosed",
     "NodeConfig",
+    "OperationFailed",
+    "Outcome",
     "PayloadTooLarge",
+    "ProgramHost",
     "RadioModel",
     "Refused",
     "RemoteError",
     "RobotLost",
+    "RunTeam",
+    "StepMetrics",
     "Subscription",
+    "TaskTeam",
     "Team",
     "UnknownProcedure",
     "UnknownRobot",
     "WireError",
     "free_port",
+    "launch",
     "pack",
     "procedure",
     "unpack",

@@ -170,6 +170,13 @@ class Node:
     async def __aexit__(self, *exc: object) -> None:
         await self.close()
 
+    def connected(self) -> bool:
+        """Whether this node has a link to any other zenoh node (peer or router) now."""
+        if self._session is None:
+            return False
+        info = self._session.info
+        return bool(list(info.routers_zid()) or list(info.peers_zid()))
+
     @property
     def zenoh_session(self) -> Any:
         """The underlying zenoh session (for tools and benchmarks)."""

@@ -1,0 +1,161 @@
+"""Programs: installed coroutines that every member of a team runs, started by name.
+
+A robot process (or a workstation) hosts programs with :class:`ProgramHost`, which exports:
+
+``mover.start(program, run, members, args)``  start a program run here (arguments checked)
+``mover.outcome(run)``                        wait for the run to end here; its result or error
+``mover.programs()``                          the programs installed here, with signatures
+
+A program is ``async def program(robot, team, **args)``: ``robot`` is whatever the hosting
+process gives its programs (its hardware and library), ``team`` the :class:`RunTeam` with the
+collectives. Nothing is shipped: the launcher sends a name and data arguments; a process that is
+not in the team cannot start anything (every call is authenticated). The launcher is not a
+coordinator: it may exit once the run has started, and the run goes on.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import inspect
+import logging
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from ._exceptions import BadArguments, MoverError, UnknownProcedure
+from ._signature import Signature
+from ._tasks import Collectives, Policy, TaskTeam
+
+if TYPE_CHECKING:
+    from ._node import Node
+
+log = logging.getLogger("mover.programs")
+
+PROGRESS_TOPIC = "mover/run"
+
+
+class RunTeam(TaskTeam):
+    """The team as a program sees it: the collectives, plus progress reports."""
+
+    async def report(self, phase: str, **info: Any) -> None:
+        """Tell the launcher (and anyone listening) how this member is doing."""
+        await self.node.broadcast(f"{PROGRESS_TOPIC}/{self.run}",
+                                  {"member": self.me, "phase": phase, **info}, reliable=True)
+
+
+@dataclass
+class _Run:
+    program: str
+    task: asyncio.Task[Any]
+    team: RunTeam
+
+
+class ProgramHost:
+    """Hosts installed programs on one node."""
+
+    def __init__(self, node: Node, programs: Mapping[str, Callable[..., Any]], robot: Any,
+                 *, policy: Policy = "fail") -> None:
+        self.node = node
+        self.robot = robot
+        self.programs = dict(programs)
+        self.collectives = Collectives(node, policy)
+        self._signatures = {name: _args_signature(fn) for name, fn in self.programs.items()}
+        self.runs: dict[str, _Run] = {}
+        node.export(self.start, "mover.start")
+        node.export(self.outcome, "mover.outcome")
+        node.export(self.installed, "mover.programs")
+
+    def start(self, program: str, run: str, members: list[str], args: dict[str, Any]) -> None:
+        """Start ``program`` as run ``run`` among ``members`` (returns once started)."""
+        fn = self.programs.get(program)
+        if fn is None:
+            raise UnknownProcedure(f"no program {program!r} installed on {self.node.name!r} "
+                                   f"(installed: {', '.join(sorted(self.programs)) or 'none'})")
+        if run in self.runs:
+            raise BadArguments(f"run {run!r} was already started here")
+        if self.node.name not in members:
+            raise BadArguments(f"{self.node.name!r} is not among the members {members!r}")
+        try:
+            _, kwargs = self._signatures[program].bind([], args)
+        except TypeError as exc:
+            raise BadArguments(f"program {program!r}: {exc}") from None
+        team = RunTeam(self.node, run, members, collectives=self.collectives)
+        task = asyncio.get_running_loop().create_task(self._run(fn, team, kwargs))
+        self.runs[run] = _Run(program, task, team)
+        log.info("%s: started %s as run %s among %s", self.node.name, program, run, members)
+
+    async def _run(self, fn: Callable[..., Any], team: RunTeam, kwargs: dict[str, Any]) -> Any:
+        try:
+            result = await fn(self.robot, team, **kwargs)
+        except asyncio.CancelledError:
+            raise
+        except Exception as exc:
+            log.warning("%s: run %s failed: %s: %s", self.node.name, team.run,
+                        type(exc).__name__, exc)
+            await team.report("failed", error=f"{type(exc).__name__}: {exc}")
+            raise
+        await team.report("done")
+        return result
+
+    async def outcome(self, run: str) -> dict[str, Any]:
+        """Wait for run ``run`` to end here: ``{"result": ...}`` or ``{"error": ...}``."""
+        entry = self.runs.get(run)
+        if entry is None:
+            raise MoverError(f"no run {run!r} on {self.node.name!r}")
+        try:
+            result = await asyncio.shield(entry.task)
+        except asyncio.CancelledError:
+            if entry.task.cancelled():
+                return {"error": "cancelled"}
+            raise
+        except Exception as exc:
+            return {"error": f"{type(exc).__name__}: {exc}",
+                    "steps": _metrics(entry.team)}
+        return {"result": result, "steps": _metrics(entry.team)}
+
+    def installed(self) -> dict[str, str]:
+        """The installed programs and their arguments."""
+        return {name: sig.describe() for name, sig in self._signatures.items()}
+
+
+def _args_signature(fn: Callable[..., Any]) -> Signature:
+    """The signature of a program's data arguments (all but ``robot`` and ``team``)."""
+    sig = Signature(fn)
+    params = list(sig.signature.parameters.values())[2:]
+    sig.signature = sig.signature.replace(parameters=params)
+    if not inspect.iscoroutinefunction(fn):
+        raise TypeError(f"program {fn.__name__!r} must be an async function")
+    return sig
+
+
+async def launch(
+    node: Node,
+    program: str,
+    members: list[str],
+    args: dict[str, Any],
+    *,
+    run: str,
+    wait: bool = True,
+) -> dict[str, dict[str, Any]]:
+    """Start ``program`` on every one of ``members``; with ``wait``, return each one's outcome.
+
+    Raises the first CallError of a start that fails (unknown program, bad arguments, refused).
+    """
+    await asyncio.gather(*(node.call(m, "mover.start", program, run, members, args, timeout=10)
+                           for m in members))
+    if not wait:
+        return {}
+
+    async def outcome(member: str) -> dict[str, Any]:
+        try:
+            result: dict[str, Any] = await node.call(member, "mover.outcome", run, timeout=None)
+            return result
+        except MoverError as exc:
+            return {"error": f"{type(exc).__name__}: {exc}"}
+
+    outcomes = await asyncio.gather(*(outcome(m) for m in members))
+    return dict(zip(members, outcomes, strict=True))
+
+
+def _metrics(team: TaskTeam) -> list[dict[str, Any]]:
+    return [{"step": m.step, "kind": m.kind, "messages": m.messages} for m in team.metrics]

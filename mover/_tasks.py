@@ -1,0 +1,402 @@
+"""Cooperative steps among team members: ``distributed_or`` and ``distributed_and``.
+
+Every member of a program run calls the same collectives in the same order, so the n-th
+collective of a run is the same step on every member. Each step has a designated member, chosen
+as the task runs: the first (by name) of the step's members that is alive. It is an ordinary
+member, not a server; if it dies, the next one takes over.
+
+OR (MOVER's ``distributed_or``). Every member starts the operation and asks the designated
+member for the decision (a long-poll call). The first member to finish claims the win; the
+designated member takes the first claim it receives — one place, one order, so all members agree
+on one winner even when several finish within the same millisecond — and answers every waiting
+member with the winner and its results. The others' operations are then cancelled (their
+``finally`` blocks run: motors stop). Messages per step: n-1 polls and their n-1 replies, plus one
+claim and its reply: 2n.
+
+AND, designated variant (section 4.4): each member sends its result to the designated member and
+gets everybody's results in the reply, once all have finished: 2(n-1) messages.
+AND, all-to-all: each member sends its result to every other member: 2n(n-1) messages.
+(A message is one signed envelope; a call is a request and its reply.)
+
+Failures. A member that leaves the team during a step (its process died or hung past its lease)
+makes the step fail with :class:`MemberLost` within about a second, or, with
+``policy="survivors"``, the step goes on without it (an OR whose members all died still fails).
+A member that has lost every link (the network is gone) does not count anyone as lost: the step
+stalls, and resumes when the links return, re-sending what was not answered; the designated
+member keeps its state, so no result is lost. Limitation: if the membership views of two members
+disagree for a moment (a link flapping), both may act as designated member of the same step;
+taking over waits until every live member has re-joined, which covers the common case.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import time
+from collections.abc import Awaitable, Callable, Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Literal
+
+from ._exceptions import CallError, MemberLost, RemoteError
+
+if TYPE_CHECKING:
+    from ._node import Node
+
+log = logging.getLogger("mover.tasks")
+
+Policy = Literal["fail", "survivors"]
+_STEP_MEMORY = 512  # finished steps a designated member remembers (for late re-sends)
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """The result of a ``distributed_or`` step: who won and what its operation returned."""
+
+    winner: str
+    result: Any
+
+
+@dataclass(frozen=True)
+class OperationFailed:
+    """Stands in a ``distributed_and`` result for a member whose operation raised."""
+
+    type: str
+    message: str
+
+
+@dataclass
+class StepMetrics:
+    """What one member sent for one step (sum over members for the step's total)."""
+
+    step: int
+    kind: str
+    requests: int = 0  # envelopes this member sent as requests
+    messages: int = 0  # requests and the replies they got
+    started: float = field(default_factory=time.perf_counter)
+    finished: float = 0.0  # local operation finished (perf_counter)
+    continued: float = 0.0  # the step's outcome known here (perf_counter)
+
+
+# -- the designated member's side -----------------------------------------------------------------
+
+
+@dataclass
+class _Step:
+    members: frozenset[str]
+    joined: set[str] = field(default_factory=set)
+    claims: list[tuple[str, Any]] = field(default_factory=list)
+    results: dict[str, Any] = field(default_factory=dict)
+    decision: asyncio.Future[list[Any]] = field(
+        default_factory=lambda: asyncio.get_running_loop().create_future())
+    takeover: bool = False  # this member took over from a designated member that is gone
+    lost: list[str] = field(default_factory=list)  # members already gone when it took over
+
+
+class Collectives:
+    """One per node: serves the steps this node is designated for (or receives, all-to-all)."""
+
+    def __init__(self, node: Node, policy: Policy = "fail") -> None:
+        self.node = node
+        self.policy = policy
+        self._steps: dict[tuple[str, int], _Step] = {}
+        node.export(self.or_join, "mover.or_join")
+        node.export(self.or_claim, "mover.or_claim")
+        node.export(self.and_done, "mover.and_done")
+        node.export(self.and_put, "mover.and_put")
+        node.team.on_leave(self._member_left)
+
+    def step(self, run: str, step: int, members: Sequence[str]) -> _Step:
+        key = (run, step)
+        state = self._steps.get(key)
+        if state is None:
+            state = self._steps[key] = _Step(frozenset(members))
+            state.lost = [m for m in members if m < self.node.name and m not in self.node.team]
+            state.takeover = bool(state.lost)
+            while len(self._steps) > _STEP_MEMORY:
+                oldest = next(iter(self._steps))
+                if not self._steps[oldest].decision.done():
+                    break
+                del self._steps[oldest]
+        return state
+
+    def _expected(self, state: _Step) -> set[str]:
+        return {m for m in state.members if m in self.node.team}
+
+    async def or_join(self, run: str, step: int, member: str, members: list[str],
+                      known: list[Any] | None = None) -> list[Any]:
+        """A member waits for the decision (and tells what it knows after a takeover)."""
+        state = self.step(run, step, members)
+        state.joined.add(member)
+        if known is not None and not state.decision.done():
+            state.decision.set_result(known)
+        self._maybe_decide(state)
+        return await asyncio.shield(state.decision)
+
+    async def or_claim(self, run: str, step: int, member: str, members: list[str],
+                       result: Any) -> list[Any]:
+        """A member finished its operation: it wins unless someone claimed first."""
+        state = self.step(run, step, members)
+        state.joined.add(member)
+        if all(m != member for m, _ in state.claims):
+            state.claims.append((member, result))
+        self._maybe_decide(state)
+        return await asyncio.shield(state.decision)
+
+    def _maybe_decide(self, state: _Step) -> None:
+        if state.decision.done():
+            return
+        if state.takeover:
+            if not self._expected(state) <= state.joined:
+                return  # a successor decides only once every live member has said what it knows
+            if state.lost and self.policy == "fail":
+                state.decision.set_result(["lost", state.lost])
+                return
+        if state.claims:
+            winner, result = state.claims[0]
+            state.decision.set_result(["won", winner, result])
+
+    async def and_done(self, run: str, step: int, member: str, members: list[str],
+                       result: Any) -> list[Any]:
+        """A member finished: record its result; answer when every live member has."""
+        state = self.step(run, step, members)
+        state.results[member] = result
+        self._maybe_complete(state)
+        return await asyncio.shield(state.decision)
+
+    def and_put(self, run: str, step: int, member: str, members: list[str], result: Any) -> None:
+        """All-to-all: a member's result, sent to every other member."""
+        state = self.step(run, step, members)
+        state.results[member] = result
+        self._maybe_complete(state)
+
+    def _maybe_complete(self, state: _Step) -> None:
+        if state.decision.done():
+            return
+        if state.lost and self.policy == "fail":
+            state.decision.set_result(["lost", state.lost])
+            return
+        expected = self._expected(state) | state.results.keys() & state.members
+        if self.policy == "fail" and not state.members <= expected:
+            return  # _member_left decides the failure
+        if expected and expected <= state.results.keys():
+            state.decision.set_result(["all", {m: state.results[m] for m in sorted(expected)}])
+
+    def _member_left(self, name: str) -> None:
+        if not self.node.connected():
+            return  # we are cut off, not they: stall (see the module docstring)
+        for state in list(self._steps.values()):
+            if state.decision.done() or name not in state.members:
+                continue
+            alive = self._expected(state)
+            if not alive:
+                state.decision.set_result(["lost", sorted(state.members)])
+            elif self.policy == "fail" and name not in state.results:
+                state.decision.set_result(["lost", [name]])
+            else:
+                self._maybe_decide(state)
+                self._maybe_complete(state)
+
+
+# -- a member's side ------------------------------------------------------------------------------
+
+
+class TaskTeam:
+    """The members of one program run, and the collective steps among them.
+
+    ``members`` must be the same list on every member; ``run`` names the run (the same on every
+    member). ``stall_timeout`` bounds how long a step waits for lost links to come back.
+    """
+
+    def __init__(self, node: Node, run: str, members: Sequence[str], *,
+                 collectives: Collectives | None = None, policy: Policy = "fail",
+                 stall_timeout: float = 60.0) -> None:
+        if node.name not in members:
+            raise ValueError(f"{node.name!r} is not one of the members {list(members)!r}")
+        self.node = node
+        self.run = run
+        self.members = sorted(set(members))
+        self.collectives = collectives or Collectives(node, policy)
+        self.stall_timeout = stall_timeout
+        self.metrics: list[StepMetrics] = []
+        self._step = 0
+
+    @property
+    def me(self) -> str:
+        """This member's name."""
+        return self.node.name
+
+    async def distributed_or(
+        self,
+        operation: Callable[[], Awaitable[Any]],
+        continuation: Callable[[Outcome], Awaitable[Any]] | None = None,
+    ) -> Any:
+        """Run ``operation`` on every member; the first to finish wins, the others stop.
+
+        Returns the :class:`Outcome` (winner and its result), or what ``continuation(outcome)``
+        returns. Raises MemberLost if a member is lost (policy ``fail``) or all are.
+        """
+        metrics = self._begin("or")
+        op = asyncio.ensure_future(operation())
+        try:
+            decision = await self._or_decision(metrics, op)
+        finally:
+            if not op.done():
+                op.cancel()
+            await asyncio.gather(op, return_exceptions=True)  # the losers' cleanup runs here
+        metrics.continued = time.perf_counter()
+        if decision[0] == "lost":
+            raise MemberLost(f"step {metrics.step} of run {self.run!r} lost {decision[1]}",
+                             members=frozenset(decision[1]))
+        outcome = Outcome(decision[1], decision[2])
+        return await continuation(outcome) if continuation else outcome
+
+    async def _or_decision(self, metrics: StepMetrics, op: asyncio.Future[Any]) -> list[Any]:
+        known: list[Any] | None = None
+        while True:
+            designated = self._designated()
+            args = (self.run, metrics.step, self.me, self.members)
+            try:
+                if op.done() and not op.cancelled() and op.exception() is None:
+                    metrics.finished = metrics.finished or time.perf_counter()
+                    decision: list[Any] = await self._ask(
+                        metrics, designated, "mover.or_claim", *args, op.result())
+                    return decision
+                poll = asyncio.ensure_future(
+                    self._ask(metrics, designated, "mover.or_join", *args, known))
+                poll.add_done_callback(_quiet)
+                await asyncio.wait({poll} if op.done() else {poll, op},
+                                   return_when=asyncio.FIRST_COMPLETED)
+                if poll.done():
+                    decision = poll.result()
+                    return decision
+                if op.exception() is not None:
+                    log.warning("%s: the operation of step %d failed: %r", self.me,
+                                metrics.step, op.exception())
+                # Loop round to claim; the poll stays open and its answer is not waited for.
+            except _Retry as retry:
+                known = retry.known or known
+                await self._recover(designated)
+
+    async def distributed_and(
+        self,
+        operation: Callable[[], Awaitable[Any]],
+        continuation: Callable[[dict[str, Any]], Awaitable[Any]] | None = None,
+        *,
+        designated: bool = True,
+    ) -> Any:
+        """Run ``operation`` on every member; go on when all have finished, with all results.
+
+        Returns ``{member: result}`` (an :class:`OperationFailed` for a member whose operation
+        raised), or what ``continuation(results)`` returns. ``designated=False`` uses the
+        all-to-all exchange (O(n^2) messages) instead of the designated member (O(n)).
+        """
+        metrics = self._begin("and" if designated else "and_all")
+        error: BaseException | None = None
+        try:
+            result = await operation()
+        except Exception as exc:
+            error = exc
+            result = OperationFailed(type(exc).__name__, str(exc))
+        metrics.finished = time.perf_counter()
+        wire = ["__failed__", result.type, result.message] if error else result
+        if designated:
+            decision = await self._and_designated(metrics, wire)
+        else:
+            decision = await self._and_all(metrics, wire)
+        metrics.continued = time.perf_counter()
+        if decision[0] == "lost":
+            raise MemberLost(f"step {metrics.step} of run {self.run!r} lost {decision[1]}",
+                             members=frozenset(decision[1]))
+        if error is not None:
+            raise error
+        results = {m: _unwire(r) for m, r in decision[1].items()}
+        return await continuation(results) if continuation else results
+
+    async def _and_designated(self, metrics: StepMetrics, result: Any) -> list[Any]:
+        while True:
+            designated = self._designated()
+            try:
+                decision: list[Any] = await self._ask(
+                    metrics, designated, "mover.and_done", self.run, metrics.step, self.me,
+                    self.members, result)
+                return decision
+            except _Retry:
+                await self._recover(designated)
+
+    async def _and_all(self, metrics: StepMetrics, result: Any) -> list[Any]:
+        state = self.collectives.step(self.run, metrics.step, self.members)
+
+        async def send(member: str) -> None:
+            while member in self.node.team or not self.node.connected():
+                try:
+                    await self._ask(metrics, member, "mover.and_put", self.run, metrics.step,
+                                    self.me, self.members, result)
+                    return
+                except _Retry:
+                    await self._recover(member)
+
+        self.collectives.and_put(self.run, metrics.step, self.me, self.members, result)
+        senders = [asyncio.ensure_future(send(m)) for m in self.members if m != self.me]
+        try:
+            decision: list[Any] = await asyncio.shield(state.decision)
+            return decision
+        finally:
+            await asyncio.gather(*senders, return_exceptions=True)
+
+    # -- helpers ------------------------------------------------------------------------------
+
+    def _begin(self, kind: str) -> StepMetrics:
+        self._step += 1
+        metrics = StepMetrics(self._step, kind)
+        self.metrics.append(metrics)
+        return metrics
+
+    def _designated(self) -> str:
+        alive = [m for m in self.members if m in self.node.team]
+        return alive[0] if alive else self.me
+
+    async def _ask(self, metrics: StepMetrics, member: str, procedure: str, *args: Any) -> Any:
+        if member == self.me:  # the designated member is this one: no message
+            handler = getattr(self.collectives, procedure.split(".")[1])
+            result = handler(*args)
+            return await result if asyncio.iscoroutine(result) else result
+        metrics.requests += 1
+        metrics.messages += 2
+        try:
+            return await self.node.call(member, procedure, *args, timeout=None)
+        except RemoteError:
+            raise
+        except CallError as exc:  # lost, unknown, refused: find out why, then try again
+            raise _Retry(str(exc)) from exc
+
+    async def _recover(self, member: str) -> None:
+        """After a failed call: wait out an outage, or let the member's departure settle."""
+        deadline = time.monotonic() + self.stall_timeout
+        if not self.node.connected():
+            log.warning("%s: links lost during run %r: stalling", self.me, self.run)
+        while not self.node.connected():  # zenoh offers no event for this: poll
+            if time.monotonic() > deadline:
+                raise MemberLost(f"links lost for over {self.stall_timeout} s",
+                                 members=frozenset(self.members) - {self.me})
+            await asyncio.sleep(0.05)
+        # Links are up: give members that were cut off a moment to be seen again.
+        settle = time.monotonic() + 1.0
+        while member not in self.node.team and time.monotonic() < settle:  # noqa: ASYNC110
+            await asyncio.sleep(0.05)
+
+
+def _quiet(task: asyncio.Future[Any]) -> None:
+    if not task.cancelled():
+        task.exception()  # retrieved: a poll nobody waits for any more may fail quietly
+
+
+class _Retry(Exception):
+    def __init__(self, why: str, known: list[Any] | None = None) -> None:
+        super().__init__(why)
+        self.known = known
+
+
+def _unwire(value: Any) -> Any:
+    if isinstance(value, list) and len(value) == 3 and value[0] == "__failed__":
+        return OperationFailed(str(value[1]), str(value[2]))
+    return value

@@ -1,0 +1,130 @@
+"""distributed_or / distributed_and among nodes in one process (real zenoh on 127.0.0.1)."""
+
+from __future__ import annotations
+
+import asyncio
+from collections.abc import AsyncIterator
+from contextlib import AsyncExitStack
+
+import pytest
+import pytest_asyncio
+
+from mover import MemberLost, Node, NodeConfig, OperationFailed, TaskTeam, Team, free_port
+
+
+@pytest_asyncio.fixture
+async def nodes() -> AsyncIterator[list[Node]]:
+    team = Team.generate("alpha")
+    port = free_port()
+    async with AsyncExitStack() as stack:
+        out = [await stack.enter_async_context(
+            Node("n0", team, config=NodeConfig(listen=(f"tcp/127.0.0.1:{port}",))))]
+        for i in range(1, 5):
+            out.append(await stack.enter_async_context(
+                Node(f"n{i}", team, config=NodeConfig(connect=(f"tcp/127.0.0.1:{port}",)))))
+        for n in out:
+            await n.team.wait_for({f"n{i}" for i in range(5)}, timeout=10)
+        yield out
+
+
+def teams(nodes: list[Node], run: str = "r", **kw: object) -> list[TaskTeam]:
+    names = [n.name for n in nodes]
+    return [TaskTeam(n, run, names, **kw) for n in nodes]  # type: ignore[arg-type]
+
+
+async def test_or_first_finisher_wins_and_losers_clean_up(nodes: list[Node]) -> None:
+    cleaned: list[str] = []
+
+    def op(name: str, delay: float):
+        async def run() -> str:
+            try:
+                await asyncio.sleep(delay)
+                return f"found by {name}"
+            finally:
+                cleaned.append(name)
+        return run
+
+    ts = teams(nodes)
+    delays = {"n0": 5.0, "n1": 5.0, "n2": 0.05, "n3": 5.0, "n4": 5.0}
+    outs = await asyncio.gather(*(t.distributed_or(op(t.me, delays[t.me])) for t in ts))
+    assert {(o.winner, o.result) for o in outs} == {("n2", "found by n2")}
+    assert sorted(cleaned) == ["n0", "n1", "n2", "n3", "n4"]  # every operation ended
+    total = sum(t.metrics[0].messages for t in ts)
+    assert total <= 2 * len(nodes)
+
+
+async def test_or_ties_agree(nodes: list[Node]) -> None:
+    ts = teams(nodes)
+    for _ in range(20):
+        async def now(t: TaskTeam) -> str:
+            return t.me
+        outs = await asyncio.gather(*(t.distributed_or(lambda t=t: now(t)) for t in ts))
+        assert len({o.winner for o in outs}) == 1
+
+
+async def test_and_gives_everyone_all_results_both_variants(nodes: list[Node]) -> None:
+    ts = teams(nodes)
+    for designated in (True, False):
+        async def op(t: TaskTeam) -> int:
+            await asyncio.sleep(0.01 * int(t.me[1:]))
+            return int(t.me[1:]) ** 2
+
+        outs = await asyncio.gather(*(t.distributed_and(lambda t=t: op(t), designated=designated)
+                                      for t in ts))
+        assert all(o == {f"n{i}": i * i for i in range(5)} for o in outs)
+    n = len(nodes)
+    designated_msgs = sum(t.metrics[0].messages for t in ts)
+    all_msgs = sum(t.metrics[1].messages for t in ts)
+    assert designated_msgs == 2 * (n - 1)
+    assert all_msgs == 2 * n * (n - 1)
+
+
+async def test_and_reports_failed_operations(nodes: list[Node]) -> None:
+    ts = teams(nodes)
+
+    async def op(t: TaskTeam) -> str:
+        if t.me == "n3":
+            raise RuntimeError("stuck")
+        return "ok"
+
+    outs = await asyncio.gather(*(t.distributed_and(lambda t=t: op(t)) for t in ts),
+                                return_exceptions=True)
+    assert isinstance(outs[3], RuntimeError)
+    assert outs[0]["n3"] == OperationFailed("RuntimeError", "stuck")  # type: ignore[index]
+
+
+async def test_continuation_gets_the_outcome(nodes: list[Node]) -> None:
+    ts = teams(nodes)
+
+    async def op(t: TaskTeam) -> int:
+        await asyncio.sleep(0 if t.me == "n4" else 5)
+        return 7
+
+    async def then(outcome: object) -> str:
+        return f"continued after {outcome.winner}"  # type: ignore[attr-defined]
+
+    outs = await asyncio.gather(*(t.distributed_or(lambda t=t: op(t), then) for t in ts))
+    assert outs == ["continued after n4"] * 5
+
+
+@pytest.mark.parametrize("policy", ["fail", "survivors"])
+async def test_a_member_leaving_during_and_fails_the_step_or_is_survived(
+    nodes: list[Node], policy: str
+) -> None:
+    ts = teams(nodes[:4], policy=policy)
+
+    async def op(t: TaskTeam) -> str:
+        await asyncio.sleep(3600 if t.me == "n3" else 0.01)  # n3 never finishes
+        return t.me
+
+    tasks = [asyncio.ensure_future(t.distributed_and(lambda t=t: op(t))) for t in ts]
+    await asyncio.sleep(0.2)
+    tasks[3].cancel()
+    await nodes[3].close()  # as if n3's process died
+    if policy == "fail":
+        for task in tasks[:3]:
+            with pytest.raises(MemberLost):
+                await asyncio.wait_for(task, 1.0)
+    else:
+        outs = [await asyncio.wait_for(task, 1.0) for task in tasks[:3]]
+        assert outs == [{"n0": "n0", "n1": "n1", "n2": "n2"}] * 3
