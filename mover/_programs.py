@@ -22,9 +22,9 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from ._exceptions import BadArguments, MoverError, UnknownProcedure
+from ._exceptions import BadArguments, MoverError, RobotLost, UnknownProcedure, UnknownRobot
 from ._signature import Signature
-from ._tasks import Collectives, Policy, TaskTeam
+from ._tasks import Collectives, Policy, TaskTeam, wait_reachable
 
 if TYPE_CHECKING:
     from ._node import Node
@@ -54,8 +54,9 @@ class ProgramHost:
     """Hosts installed programs on one node."""
 
     def __init__(self, node: Node, programs: Mapping[str, Callable[..., Any]], robot: Any,
-                 *, policy: Policy = "fail") -> None:
+                 *, policy: Policy = "fail", join_timeout: float = 10.0) -> None:
         self.node = node
+        self.join_timeout = join_timeout
         self.robot = robot
         self.programs = dict(programs)
         self.collectives = Collectives(node, policy)
@@ -76,17 +77,21 @@ class ProgramHost:
         if self.node.name not in members:
             raise BadArguments(f"{self.node.name!r} is not among the members {members!r}")
         try:
-            _, kwargs = self._signatures[program].bind([], args)
+            positional, kwargs = self._signatures[program].bind([], args)
         except TypeError as exc:
             raise BadArguments(f"program {program!r}: {exc}") from None
         team = RunTeam(self.node, run, members, collectives=self.collectives)
-        task = asyncio.get_running_loop().create_task(self._run(fn, team, kwargs))
+        task = asyncio.get_running_loop().create_task(
+            self._run(fn, team, positional, kwargs, members))
         self.runs[run] = _Run(program, task, team)
         log.info("%s: started %s as run %s among %s", self.node.name, program, run, members)
 
-    async def _run(self, fn: Callable[..., Any], team: RunTeam, kwargs: dict[str, Any]) -> Any:
+    async def _run(self, fn: Callable[..., Any], team: RunTeam, args: list[Any],
+                   kwargs: dict[str, Any], members: list[str]) -> Any:
         try:
-            result = await fn(self.robot, team, **kwargs)
+            # Every member starts from the same view of the team (the designated members).
+            await self.node.team.wait_for(members, timeout=self.join_timeout)
+            result = await fn(self.robot, team, *args, **kwargs)
         except asyncio.CancelledError:
             raise
         except Exception as exc:
@@ -147,11 +152,16 @@ async def launch(
         return {}
 
     async def outcome(member: str) -> dict[str, Any]:
-        try:
-            result: dict[str, Any] = await node.call(member, "mover.outcome", run, timeout=None)
-            return result
-        except MoverError as exc:
-            return {"error": f"{type(exc).__name__}: {exc}"}
+        while True:
+            try:
+                result: dict[str, Any] = await node.call(member, "mover.outcome", run,
+                                                         timeout=None)
+                return result
+            except (RobotLost, UnknownRobot) as exc:
+                if not await wait_reachable(node, member):
+                    return {"error": f"{type(exc).__name__}: {exc}"}
+            except MoverError as exc:
+                return {"error": f"{type(exc).__name__}: {exc}"}
 
     outcomes = await asyncio.gather(*(outcome(m) for m in members))
     return dict(zip(members, outcomes, strict=True))

@@ -253,7 +253,7 @@ class TaskTeam:
     async def _or_decision(self, metrics: StepMetrics, op: asyncio.Future[Any]) -> list[Any]:
         known: list[Any] | None = None
         while True:
-            designated = self._designated()
+            designated = await self._designated()
             args = (self.run, metrics.step, self.me, self.members)
             try:
                 if op.done() and not op.cancelled() and op.exception() is None:
@@ -314,7 +314,7 @@ class TaskTeam:
 
     async def _and_designated(self, metrics: StepMetrics, result: Any) -> list[Any]:
         while True:
-            designated = self._designated()
+            designated = await self._designated()
             try:
                 decision: list[Any] = await self._ask(
                     metrics, designated, "mover.and_done", self.run, metrics.step, self.me,
@@ -351,9 +351,11 @@ class TaskTeam:
         self.metrics.append(metrics)
         return metrics
 
-    def _designated(self) -> str:
-        alive = [m for m in self.members if m in self.node.team]
-        return alive[0] if alive else self.me
+    async def _designated(self) -> str:
+        if not self.node.connected():  # never choose while cut off: every view is empty
+            await self._recover(self.members)
+        alive = [m for m in self.members if m == self.me or m in self.node.team]
+        return alive[0]
 
     async def _ask(self, metrics: StepMetrics, member: str, procedure: str, *args: Any) -> Any:
         if member == self.me:  # the designated member is this one: no message
@@ -369,20 +371,43 @@ class TaskTeam:
         except CallError as exc:  # lost, unknown, refused: find out why, then try again
             raise _Retry(str(exc)) from exc
 
-    async def _recover(self, member: str) -> None:
-        """After a failed call: wait out an outage, or let the member's departure settle."""
-        deadline = time.monotonic() + self.stall_timeout
-        if not self.node.connected():
-            log.warning("%s: links lost during run %r: stalling", self.me, self.run)
-        while not self.node.connected():  # zenoh offers no event for this: poll
-            if time.monotonic() > deadline:
+    async def _recover(self, member: str | Sequence[str]) -> None:
+        if not await wait_reachable(self.node, member, self.stall_timeout):
+            if not self.node.connected():
                 raise MemberLost(f"links lost for over {self.stall_timeout} s",
                                  members=frozenset(self.members) - {self.me})
-            await asyncio.sleep(0.05)
-        # Links are up: give members that were cut off a moment to be seen again.
-        settle = time.monotonic() + 1.0
-        while member not in self.node.team and time.monotonic() < settle:  # noqa: ASYNC110
-            await asyncio.sleep(0.05)
+
+
+async def wait_reachable(node: Node, member: str | Sequence[str],
+                         stall_timeout: float = 60.0) -> bool:
+    """After a failed call to ``member``: wait out an outage; True if it is a member again.
+
+    A member gone while this node is linked to others is gone (False at once). If this node
+    has lost every link, wait up to ``stall_timeout`` for the links, then a moment for
+    ``member`` (or every one of several) to be seen again.
+    """
+    wanted = {member} if isinstance(member, str) else set(member)
+    grace = time.monotonic() + 0.5
+    while node.connected():
+        # A failed call and a lost link can be seen in either order: wait a moment to tell a
+        # member that is gone (we stay linked) from an outage (our links go too).
+        if wanted <= node.team.members():
+            return True
+        if time.monotonic() > grace:
+            return False
+        await asyncio.sleep(0.02)
+    log.warning("%s: links lost: stalling", node.name)
+    deadline = time.monotonic() + stall_timeout
+    while not node.connected():  # zenoh offers no event for this: poll
+        if time.monotonic() > deadline:
+            return False
+        await asyncio.sleep(0.05)
+    settle = time.monotonic() + 2.0
+    while not wanted <= node.team.members() and time.monotonic() < settle:  # noqa: ASYNC110
+        await asyncio.sleep(0.05)
+    back = wanted <= node.team.members()
+    log.info("%s: links back; %s %s", node.name, sorted(wanted), "back" if back else "gone")
+    return back
 
 
 def _quiet(task: asyncio.Future[Any]) -> None:

@@ -41,11 +41,12 @@ class Cluster:
         team: Team | None = None,
         ready: str = "READY",
         timeout: float = 20.0,
+        config: NodeConfig | None = None,
     ) -> asyncio.subprocess.Process:
         """Start ``python -m module args`` and wait until it prints ``ready``."""
         env = dict(os.environ)
         env.update((team or self.team).env())
-        env.update(self.peer.env())
+        env.update((config or self.peer).env())
         env["PYTHONPATH"] = str(ROOT)
         proc = await asyncio.create_subprocess_exec(
             sys.executable, "-m", module, *args,

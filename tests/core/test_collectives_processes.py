@@ -1,0 +1,108 @@
+"""The collectives across real robot processes over real zenoh on 127.0.0.1."""
+
+from __future__ import annotations
+
+import asyncio
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from mover import Node, NodeConfig, Refused, Team, UnknownRobot, free_port, launch
+from tests.helpers.procs import cluster
+
+
+async def start_team(c, node: Node, names: list[str], config: NodeConfig | None = None) -> None:
+    await asyncio.gather(*(c.start("tests.helpers.team_proc", "--name", n, config=config)
+                           for n in names))
+    await node.team.wait_for(names, timeout=30)
+
+
+async def test_ties_always_agree_on_one_winner_10_processes_100_rounds() -> None:
+    names = [f"m{i}" for i in range(10)]
+    async with cluster() as c, Node("launcher", c.team, kind="tool", config=c.seed) as node:
+        await start_team(c, node, names)
+        start = time.time() + 1.0
+        outcomes = await launch(node, "ties", names,
+                                {"rounds": 100, "start": start, "gap": 0.03}, run="ties")
+        winners = [o["result"] for o in outcomes.values()]
+        assert all(w == winners[0] for w in winners), "members disagreed"
+        assert len(winners[0]) == 100
+        print(f"distinct winners over 100 tied rounds: {sorted(set(winners[0]))}")
+
+
+async def test_losers_clean_up(tmp_path: Path) -> None:
+    names = ["a", "b", "c", "d"]
+    async with cluster() as c, Node("launcher", c.team, kind="tool", config=c.seed) as node:
+        await start_team(c, node, names)
+        outcomes = await launch(node, "cleanup", names,
+                                {"winner": "c", "marker_dir": str(tmp_path)}, run="clean")
+        assert {o["result"] for o in outcomes.values()} == {"c:the box"}
+        for loser in ("a", "b", "d"):
+            assert (tmp_path / loser).read_text() == "cleaned"
+        assert not (tmp_path / "c").exists()
+
+
+async def test_sigkilled_member_during_and_survivors_told_within_a_second() -> None:
+    names = ["a", "b", "c", "d"]
+    async with cluster() as c, Node("launcher", c.team, kind="tool", config=c.seed) as node:
+        await start_team(c, node, names)
+        victim = c.procs[names.index("b")]
+        done = asyncio.ensure_future(launch(node, "and_wait", names, {"slow": "b"}, run="kill"))
+        await asyncio.sleep(0.5)
+        killed = time.time()
+        victim.kill()
+        outcomes = await asyncio.wait_for(done, 10)
+        for name in ("a", "c", "d"):
+            result = outcomes[name]["result"]
+            assert result.startswith("lost ['b']"), result
+            told = float(result.rsplit(" ", 1)[1]) - killed
+            print(f"{name} told after {told * 1000:.0f} ms")
+            assert told < 1.0
+        assert "error" in outcomes["b"]
+
+
+async def test_link_cut_and_restored_during_a_step_completes_with_the_right_result() -> None:
+    names = ["a", "b", "c"]
+    router_port = free_port()
+    client = NodeConfig(mode="client", listen=(), connect=(f"tcp/127.0.0.1:{router_port}",))
+
+    async def router() -> asyncio.subprocess.Process:
+        proc = await asyncio.create_subprocess_exec(
+            sys.executable, "-m", "mover._cli", "router", "--listen",
+            f"tcp/127.0.0.1:{router_port}", stdout=asyncio.subprocess.PIPE)
+        assert proc.stdout is not None
+        await asyncio.wait_for(proc.stdout.readline(), 20)
+        return proc
+
+    r = await router()
+    try:
+        async with cluster() as c, Node("launcher", c.team, kind="tool", config=client) as node:
+            await start_team(c, node, names, config=client)
+            done = asyncio.ensure_future(
+                launch(node, "and_outage", names, {"hold": 1.0}, run="cut"))
+            await asyncio.sleep(0.4)
+            r.kill()  # the network is gone while every operation is still running
+            await r.wait()
+            await asyncio.sleep(1.8)
+            r = await router()  # and back
+            outcomes = await asyncio.wait_for(done, 30)
+            expected = {"a": "A", "b": "B", "c": "C"}
+            assert {n: o.get("result") for n, o in outcomes.items()} == {n: expected
+                                                                          for n in names}
+    finally:
+        r.kill()
+        await r.wait()
+
+
+async def test_an_outsider_cannot_start_a_program() -> None:
+    async with cluster() as c, Node("launcher", c.team, kind="tool", config=c.seed) as node:
+        await start_team(c, node, ["a"])
+        async with Node("intruder", Team.generate("alpha"), config=c.peer) as outsider:
+            await asyncio.sleep(0.5)
+            with pytest.raises((Refused, UnknownRobot)):
+                await outsider.call("a", "mover.start", "ties", "evil", ["a"],
+                                    {"rounds": 1, "start": 0.0, "gap": 0.0}, timeout=5)
+        with pytest.raises(Exception, match="no run 'evil'"):
+            await node.call("a", "mover.outcome", "evil", timeout=5)
