@@ -372,10 +372,10 @@ class TaskTeam:
             raise _Retry(str(exc)) from exc
 
     async def _recover(self, member: str | Sequence[str]) -> None:
-        if not await wait_reachable(self.node, member, self.stall_timeout):
-            if not self.node.connected():
-                raise MemberLost(f"links lost for over {self.stall_timeout} s",
-                                 members=frozenset(self.members) - {self.me})
+        reachable = await wait_reachable(self.node, member, self.stall_timeout)
+        if not reachable and not self.node.connected():
+            raise MemberLost(f"links lost for over {self.stall_timeout} s",
+                             members=frozenset(self.members) - {self.me})
 
 
 async def wait_reachable(node: Node, member: str | Sequence[str],

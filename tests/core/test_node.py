@@ -20,12 +20,12 @@ def configs() -> tuple[NodeConfig, NodeConfig]:
 
 
 async def test_clean_shutdown_leaves_no_threads() -> None:
-    before = threading.active_count()
+    before = set(threading.enumerate())
     seed, peer = configs()
     team = Team.generate("alpha")
     async with Node("a", team, config=seed) as a, Node("b", team, config=peer):
         await a.team.wait_for({"a", "b"}, timeout=10)
-    assert threading.active_count() == before
+    assert set(threading.enumerate()) - before == set()
     with pytest.raises(MoverError, match="not open"):
         await a.call("b", "x")
 
