@@ -182,3 +182,105 @@ def run_keygen(args: argparse.Namespace) -> int:
     else:
         print(f"export MOVER_TEAM={team.name} MOVER_TEAM_KEY={team.key.hex()}")
     return 0
+
+
+# -- run ------------------------------------------------------------------------------------------
+
+
+def register_run(sub: Sub) -> None:
+    """Add ``mover run``."""
+    p = sub.add_parser("run", help="start an installed program on members of a team",
+                       description="Starts PROGRAM on every chosen member (no code is sent: "
+                       "members run their installed copy), shows progress, and prints each "
+                       "member's outcome. The launcher is not a coordinator: with --detach it "
+                       "exits once the run has started.")
+    p.add_argument("program")
+    p.add_argument("--robots", help="comma-separated members (default: every member that is "
+                   "not a tool or a world)")
+    p.add_argument("--args", metavar="JSON", default="{}",
+                   help="the program's arguments as a JSON object")
+    p.add_argument("--detach", action="store_true", help="exit once the run has started")
+    p.add_argument("--run-id", help="name of the run (default: PROGRAM-<random>)")
+    _team_options(p)
+    p.set_defaults(func=run_run)
+
+
+def run_run(args: argparse.Namespace) -> int:
+    kwargs = _json(args.args, "--args")
+    if not isinstance(kwargs, dict):
+        raise UsageError("--args must be a JSON object")
+    try:
+        check_name("program", args.program)
+        robots = [check_name("robot", r) for r in args.robots.split(",") if r] \
+            if args.robots else None
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    team, config = _open(args)
+    return asyncio.run(_run(team, config, args, robots, kwargs))
+
+
+async def _run(team: Team, config: NodeConfig, args: argparse.Namespace,
+               robots: list[str] | None, kwargs: dict[str, Any]) -> int:
+    import time
+
+    from ._node import Node
+    from ._programs import PROGRESS_TOPIC, launch
+
+    run = args.run_id or f"{args.program}-{secrets.token_hex(3)}"
+    async with Node(f"run-{secrets.token_hex(3)}", team, kind="tool", config=config,
+                    observer=True) as node:
+        try:
+            if robots:
+                await node.team.wait_for(robots, timeout=args.wait)
+            else:
+                await asyncio.sleep(args.wait)
+        except TimeoutError:
+            missing = sorted(set(robots or ()) - node.team.members())
+            print(f"mover run: not in team {team.name!r}: {', '.join(missing)}", file=sys.stderr)
+            return 1
+        members = robots or sorted(
+            n for n in node.team.members()
+            if (i := node.team.info(n)) is not None and i.kind not in ("tool", "world"))
+        if not members:
+            print(f"mover run: no members in team {team.name!r}", file=sys.stderr)
+            return 1
+        progress = node.subscribe(f"{PROGRESS_TOPIC}/{run}")
+        started = time.monotonic()
+
+        async def show() -> None:
+            async for m in progress:
+                info = {k: v for k, v in m.data.items() if k not in ("member", "phase")}
+                extra = " ".join(f"{k}={_short(v)}" for k, v in info.items())
+                print(f"[{time.monotonic() - started:6.1f}s] {m.data.get('member')}: "
+                      f"{m.data.get('phase')} {extra}".rstrip(), flush=True)
+
+        shower = asyncio.create_task(show())
+        print(f"run {run}: {args.program} on {', '.join(members)}", flush=True)
+        try:
+            outcomes = await launch(node, args.program, members, kwargs, run=run,
+                                    wait=not args.detach)
+        except CallError as exc:
+            print(f"mover run: {type(exc).__name__}: {exc}", file=sys.stderr)
+            return 1
+        finally:
+            await asyncio.sleep(0.1)
+            shower.cancel()
+    if args.detach:
+        print(f"run {run} started; the members go on without this launcher")
+        return 0
+    failed = 0
+    for member, outcome in outcomes.items():
+        if "error" in outcome:
+            failed += 1
+            print(f"{member}: FAILED {outcome['error']}")
+        else:
+            print(f"{member}: {json.dumps(outcome.get('result'), default=_plain)}")
+    return 1 if failed else 0
+
+
+def _short(value: Any) -> str:
+    if isinstance(value, float):
+        return f"{value:.2f}"
+    if isinstance(value, list) and all(isinstance(v, float) for v in value):
+        return "[" + ", ".join(f"{v:.2f}" for v in value) + "]"
+    return str(value)

@@ -54,9 +54,13 @@ class ProgramHost:
     """Hosts installed programs on one node."""
 
     def __init__(self, node: Node, programs: Mapping[str, Callable[..., Any]], robot: Any,
-                 *, policy: Policy = "fail", join_timeout: float = 10.0) -> None:
+                 *, policy: Policy = "fail", join_timeout: float = 10.0,
+                 ready: bool = True) -> None:
         self.node = node
         self.join_timeout = join_timeout
+        self.ready = asyncio.Event()  # programs wait for it: set once ``robot`` is usable
+        if ready:
+            self.ready.set()
         self.robot = robot
         self.programs = dict(programs)
         self.collectives = Collectives(node, policy)
@@ -91,6 +95,8 @@ class ProgramHost:
         try:
             # Every member starts from the same view of the team (the designated members).
             await self.node.team.wait_for(members, timeout=self.join_timeout)
+            async with asyncio.timeout(self.join_timeout):
+                await self.ready.wait()
             result = await fn(self.robot, team, *args, **kwargs)
         except asyncio.CancelledError:
             raise

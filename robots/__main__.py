@@ -1,0 +1,7 @@
+"""``python -m robots``: one robot process."""
+
+import sys
+
+from robots.cli import main
+
+sys.exit(main())
