@@ -11,10 +11,10 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import contextlib
 import json
 import math
 import os
-import secrets
 import signal
 import sys
 import time
@@ -64,7 +64,7 @@ def run(args: argparse.Namespace) -> int:
 async def demo(args: argparse.Namespace, world: Path, robots: list[str],
                program_args: dict[str, Any]) -> int:
     out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    out.mkdir(parents=True, exist_ok=True)  # noqa: ASYNC240 (once, before anything starts)
     recording, png = out / "run.jsonl", out / "trajectories.png"
     team = Team.generate("demo")
     port = free_port()
@@ -159,10 +159,8 @@ async def _watch(progress: Any, states: Any, wall0: float) -> None:
 
 
 async def _gather(watcher: asyncio.Task[None]) -> tuple[dict[str, Any], dict[str, Any]]:
-    try:
+    with contextlib.suppress(asyncio.CancelledError):
         await watcher
-    except asyncio.CancelledError:
-        pass
     return _seen.get("phases", {}), _seen.get("boxes", {})
 
 
