@@ -12,7 +12,7 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from mover import Node, NodeConfig, ProgramHost, RunTeam, Team  # noqa: E402
+from mover import Node, NodeConfig, ProgramHost, RunTeam, Team
 
 
 async def bench_or(robot: None, team: RunTeam, rounds: int) -> list[list[Any]]:

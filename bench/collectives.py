@@ -23,7 +23,7 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from mover import Node, NodeConfig, Team, free_port, launch  # noqa: E402
+from mover import Node, NodeConfig, Team, free_port, launch
 
 MEMBER = str(Path(__file__).with_name("_member.py"))
 

@@ -1,0 +1,157 @@
+"""Simulated seconds per wall second of the continuous world in lock-step.
+
+    python bench/sim.py [--quick] [--no-procs]
+
+(a) the world alone: 10, 50, 200 in-process robots (8 sonar rays at 10 Hz, no camera, a
+trivial bounce-off-walls controller) through the lock-step WorldServer and the in-process HAL;
+(b) 10 and 50 robot processes (``python -m sim_hw._walker``) driving a random walk through the
+remote HAL over zenoh on 127.0.0.1, the world hosted in this process. Time is counted from the
+first tick to the last, so process start-up is left out.
+
+The last line is one JSON object: rtf_world_10, rtf_world_50, rtf_world_200, rtf_procs_10,
+rtf_procs_50 (null where not measured).
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import json
+import math
+import os
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from sim_hw import World, WorldServer, WorldSpec, in_process  # noqa: E402
+
+ROBOT = {"sonar": {"rays": 8, "max_range": 3.0}, "camera": False}
+
+
+def _arena(n: int) -> WorldSpec:
+    side = max(6.0, math.sqrt(n * 4.0))  # ~4 m² a robot
+    return WorldSpec(size=(side, side), name=f"bench-{n}")
+
+
+class _Timer:
+    """An on_tick hook: wall time of the first and the last tick."""
+
+    def __init__(self) -> None:
+        self.first: float | None = None
+        self.first_t = 0.0
+        self.last = 0.0
+        self.last_t = 0.0
+
+    def __call__(self, world: World, commands: dict) -> None:
+        now = time.perf_counter()
+        if self.first is None:
+            self.first, self.first_t = now, world.time
+        self.last, self.last_t = now, world.time
+
+    def rtf(self) -> float:
+        assert self.first is not None
+        return (self.last_t - self.first_t) / max(self.last - self.first, 1e-9)
+
+
+async def world_alone(n: int, seconds: float) -> float:
+    """Real-time factor of n in-process robots for ``seconds`` simulated."""
+    timer = _Timer()
+    server = WorldServer(World(_arena(n), seed=1), expect=n, on_tick=timer)
+    ticks = round(seconds / 0.1)
+
+    async def robot(i: int) -> None:
+        hw = await in_process(server, f"r{i:03d}", ROBOT)
+        turn = 1.0 if i % 2 else -1.0
+        for _ in range(ticks):
+            ahead = min(hw.sonar.ranges()[0:2])
+            hw.drive.set_velocity(0.0 if ahead < 0.3 else 0.4, turn if ahead < 0.3 else 0.0)
+            await hw.clock.tick()
+
+    await asyncio.gather(*(robot(i) for i in range(n)))
+    await server.aclose()
+    return timer.rtf()
+
+
+async def processes(n: int, seconds: float) -> float:
+    """Real-time factor of n walker processes on the remote HAL."""
+    from mover import Node, NodeConfig, Team, free_port
+    from sim_hw._process import serve_world
+
+    team, port = Team.generate("bench"), free_port()
+    timer = _Timer()
+    server = WorldServer(World(_arena(n), seed=1), expect=n, on_tick=timer, timeout=10.0)
+    env = dict(
+        os.environ,
+        **team.env(),
+        MOVER_MODE="peer",
+        MOVER_LISTEN="tcp/127.0.0.1:0",
+        MOVER_CONNECT=f"tcp/127.0.0.1:{port}",
+    )
+    config = NodeConfig(listen=(f"tcp/127.0.0.1:{port}",))
+    ticks = round(seconds / 0.1)
+    async with Node("world", team=team, kind="world", config=config) as node:
+        serve_world(node, server)
+        procs = [
+            await asyncio.create_subprocess_exec(
+                sys.executable,
+                "-m",
+                "sim_hw._walker",
+                f"r{i:03d}",
+                "--seed",
+                str(i),
+                "--ticks",
+                str(ticks),
+                "--spec",
+                json.dumps({"camera": False}),
+                "--timeout",
+                "60",
+                env=env,
+                cwd=ROOT,
+                stdout=asyncio.subprocess.DEVNULL,
+                stderr=asyncio.subprocess.PIPE,
+            )
+            for i in range(n)
+        ]
+        try:
+            results = await asyncio.wait_for(
+                asyncio.gather(*(p.communicate() for p in procs)), timeout=120 + 2 * n
+            )
+        finally:
+            for p in procs:
+                if p.returncode is None:
+                    p.kill()
+        failed = [p.returncode for p in procs if p.returncode]
+        if failed:
+            raise RuntimeError(f"{len(failed)} walkers failed: {results[0][1].decode()[-500:]}")
+        await server.aclose()
+    return timer.rtf()
+
+
+async def main(args: argparse.Namespace) -> dict[str, float | None]:
+    scale = 0.3 if args.quick else 1.0
+    out: dict[str, float | None] = {}
+    for n, seconds in ((10, 60.0), (50, 30.0), (200, 10.0)):
+        rtf = await world_alone(n, seconds * scale)
+        out[f"rtf_world_{n}"] = round(rtf, 1)
+        print(f"world alone, {n:3d} robots: {rtf:7.1f}x real time", flush=True)
+    for n, seconds in ((10, 30.0), (50, 10.0)):
+        key = f"rtf_procs_{n}"
+        if args.no_procs:
+            out[key] = None
+            print(f"{n} robot processes: not measured (--no-procs)")
+            continue
+        rtf = await processes(n, seconds * scale)
+        out[key] = round(rtf, 1)
+        print(f"{n:3d} robot processes: {rtf:7.1f}x real time", flush=True)
+    return out
+
+
+if __name__ == "__main__":
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="30 % of the simulated durations")
+    parser.add_argument("--no-procs", action="store_true", help="skip the multi-process runs")
+    result = asyncio.run(main(parser.parse_args()))
+    print(json.dumps(result))
