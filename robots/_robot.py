@@ -14,7 +14,8 @@ from .hal import Hardware
 class Robot:
     """One robot as its programs see it: its name, its hardware, its node.
 
-    ``node`` is None when a behaviour runs without a network (unit tests, fast experiments).
+    ``node`` is None when a behaviour runs without a network (unit tests, fast experiments);
+    ``hw`` is None on a member without a body (a workstation).
     """
 
     id: str

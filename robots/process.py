@@ -87,7 +87,8 @@ async def run_robot(
         # Export first, so that a launcher that sees this member can start programs at once;
         # they wait until the hardware is up.
         host = ProgramHost(node, programs, robot=None, ready=hardware == "none")
-        if hardware == "none":
+        if hardware == "none":  # a workstation: a member without a body
+            host.robot = Robot(name, None, node, kind)  # type: ignore[arg-type]
             if ready:
                 ready()
             await asyncio.Event().wait()

@@ -39,11 +39,11 @@ class Cluster:
         module: str,
         *args: str,
         team: Team | None = None,
-        ready: str = "READY",
+        ready: str | None = "READY",
         timeout: float = 20.0,
         config: NodeConfig | None = None,
     ) -> asyncio.subprocess.Process:
-        """Start ``python -m module args`` and wait until it prints ``ready``."""
+        """Start ``python -m module args`` and wait until it prints ``ready`` (None: no wait)."""
         env = dict(os.environ)
         env.update((team or self.team).env())
         env.update((config or self.peer).env())
@@ -53,6 +53,8 @@ class Cluster:
             stdin=asyncio.subprocess.PIPE, stdout=asyncio.subprocess.PIPE, env=env, cwd=ROOT,
         )
         self.procs.append(proc)
+        if ready is None:
+            return proc
         assert proc.stdout is not None
         async with asyncio.timeout(timeout):
             while True:

@@ -60,9 +60,9 @@ async def test_a_dropped_robot_is_told() -> None:
 
 
 async def test_concurrent_waiters_share_one_tick() -> None:
-    server = WorldServer(World(random_obstacles((6.0, 6.0), 0)), expect=1)
-    hw = await in_process(server, "r")
-    await asyncio.gather(hw.clock.tick(), hw.clock.tick(), hw.clock.tick())
+    server = WorldServer(World(random_obstacles((6.0, 6.0), 0)), expect=2)
+    a, b = await asyncio.gather(in_process(server, "a"), in_process(server, "b"))
+    await asyncio.gather(a.clock.tick(), a.clock.tick(), a.clock.tick(), b.clock.tick())
     assert server.world.tick == 1
     await server.aclose()
 
@@ -83,9 +83,32 @@ async def test_late_joiner_enters_at_a_tick_boundary() -> None:
     a = await in_process(server, "a")
     await a.clock.tick()
     joining = asyncio.ensure_future(in_process(server, "b"))
-    await a.clock.tick()
+    await asyncio.sleep(0)  # b asks to join ...
+    await a.clock.tick()  # ... and is admitted after this tick
     b = await joining
     assert b.clock.now() == a.clock.now() == pytest.approx(0.2)
     await asyncio.gather(a.clock.tick(), b.clock.tick())
     assert server.world.tick == 3
+    await server.aclose()
+
+
+async def test_a_robot_waiting_on_its_team_keeps_ticking() -> None:
+    server = WorldServer(World(random_obstacles((6.0, 6.0), 0)), expect=2, timeout=0.2)
+    busy, waiting = await asyncio.gather(in_process(server, "busy"), in_process(server, "wait"))
+    message: asyncio.Future[str] = asyncio.get_running_loop().create_future()
+
+    async def waiter() -> str:
+        async with waiting.clock.ticking():  # e.g. awaiting a distributed_and step
+            return await message
+
+    async def worker() -> None:
+        await busy.clock.sleep(3.0)  # 30 ticks, each needing the waiter's command too
+        message.set_result("done")
+        await server.leave("busy")  # (else the waiter's last pumped tick would wait for it)
+
+    got, _ = await asyncio.gather(waiter(), worker())
+    assert got == "done"
+    assert server.dropped == []
+    assert busy.clock.now() == pytest.approx(3.0)
+    assert waiting.clock.now() >= 3.0
     await server.aclose()

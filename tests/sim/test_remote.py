@@ -16,8 +16,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mover import Team, free_port
-from sim_hw import World, WorldServer, in_process, load_world
+from mover import Node, NodeConfig, Team, free_port
+from mover._cli import main
+from sim_hw import World, WorldServer, in_process, load_world, read_recording
 from sim_hw._walker import random_walk
 
 pytestmark = pytest.mark.timeout(90)
@@ -91,17 +92,18 @@ class Procs:
             str(out),
         )
 
-    def kill_all(self) -> None:
+    async def close(self) -> None:
         for proc in self.procs:
             if proc.returncode is None:
                 proc.kill()
+            await proc.communicate()  # reap it and close its pipes
 
 
 @pytest.fixture
-def procs():
+async def procs():
     p = Procs()
     yield p
-    p.kill_all()
+    await p.close()
 
 
 async def _finish(proc: asyncio.subprocess.Process, limit: float = 60.0) -> tuple[int, str]:
@@ -125,7 +127,8 @@ async def test_remote_and_in_process_give_the_same_trajectories(procs: Procs, tm
     path = tmp_path / "field.toml"
     path.write_text(WORLD)
     walkers, ticks = {"r0": 100, "r1": 101}, 80
-    world = await procs.world(path, "--expect", "2", "--seed", "5")
+    rec = tmp_path / "run.jsonl"
+    world = await procs.world(path, "--expect", "2", "--seed", "5", "--record", str(rec))
     robots = [await procs.walker(r, s, ticks, tmp_path / f"{r}.json") for r, s in walkers.items()]
     for proc in robots:
         code, err = await _finish(proc)
@@ -136,6 +139,41 @@ async def test_remote_and_in_process_give_the_same_trajectories(procs: Procs, tm
     local = await _in_process(path, 5, walkers, ticks)
     assert len(remote["r0"]) == ticks
     assert remote == local
+    _, recorded = read_recording(rec)
+    assert recorded[-1]["robots"]["r1"][:3] == local["r1"][-1]
+    assert main(["replay", str(rec), "--out", str(tmp_path / "run.png")]) == 0
+
+
+async def test_the_world_streams_snapshots(procs: Procs, tmp_path: Path) -> None:
+    path = tmp_path / "field.toml"
+    path.write_text(WORLD)
+    world = await procs.start(
+        "-m",
+        "mover._cli",
+        "world",
+        str(path),
+        "--speed",
+        "5",
+        "--state-rate",
+        "5",
+        "--until",
+        "30",
+        world=True,
+    )
+    walker = await procs.walker("r0", 1, 50, tmp_path / "r0.json")
+    config = NodeConfig(connect=(f"tcp/127.0.0.1:{procs.port}",))
+    async with Node("watcher", team=procs.team, kind="test", config=config) as node:
+        sub = node.subscribe("world/state")
+        await node.team.wait_for(["world"], timeout=20)
+        msg = await sub.get(timeout=20)
+        assert msg.sender == "world"
+        assert set(msg.data) >= {"tick", "t", "robots", "boxes"}
+        while not msg.data["robots"]:
+            msg = await sub.get(timeout=20)
+        assert list(msg.data["robots"]) == ["r0"]
+    code, err = await _finish(walker)
+    assert code == 0, err
+    world.kill()
 
 
 async def test_a_killed_robot_does_not_hang_the_world(procs: Procs, tmp_path: Path) -> None:
