@@ -32,8 +32,9 @@ async def bench_or(robot: None, team: RunTeam, rounds: int) -> list[list[Any]]:
     return out
 
 
-async def bench_and(robot: None, team: RunTeam, rounds: int, designated: bool,
-                    seed: int) -> list[list[Any]]:
+async def bench_and(
+    robot: None, team: RunTeam, rounds: int, designated: bool, seed: int
+) -> list[list[Any]]:
     """AND rounds: every member finishes after a random 0-20 ms."""
     rng = random.Random(seed + team.members.index(team.me))
     out = []

@@ -38,13 +38,24 @@ async def measure(n: int, rounds: int, seed: int) -> dict[str, float]:
     env = {**os.environ, **team.env(), **NodeConfig(connect=(f"tcp/127.0.0.1:{port}",)).env()}
     names = [f"m{i:02d}" for i in range(n)]
     procs = []
-    async with Node("launcher", team, kind="tool", observer=True,
-                    config=NodeConfig(listen=(f"tcp/127.0.0.1:{port}",))) as node:
+    async with Node(
+        "launcher",
+        team,
+        kind="tool",
+        observer=True,
+        config=NodeConfig(listen=(f"tcp/127.0.0.1:{port}",)),
+    ) as node:
         try:
             for name in names:
                 p = await asyncio.create_subprocess_exec(
-                    sys.executable, MEMBER, "--name", name, env=env,
-                    stdin=asyncio.subprocess.PIPE, stdout=asyncio.subprocess.PIPE)
+                    sys.executable,
+                    MEMBER,
+                    "--name",
+                    name,
+                    env=env,
+                    stdin=asyncio.subprocess.PIPE,
+                    stdout=asyncio.subprocess.PIPE,
+                )
                 procs.append(p)
             for p in procs:
                 assert p.stdout is not None
@@ -52,12 +63,20 @@ async def measure(n: int, rounds: int, seed: int) -> dict[str, float]:
             await node.team.wait_for(names, timeout=60)
             await asyncio.sleep(1.0)
             or_runs = await launch(node, "bench_or", names, {"rounds": rounds}, run=f"or{n}")
-            and_runs = await launch(node, "bench_and", names,
-                                    {"rounds": rounds, "designated": True, "seed": seed},
-                                    run=f"and{n}")
-            all_runs = await launch(node, "bench_and", names,
-                                    {"rounds": max(5, rounds // 4), "designated": False,
-                                     "seed": seed}, run=f"all{n}")
+            and_runs = await launch(
+                node,
+                "bench_and",
+                names,
+                {"rounds": rounds, "designated": True, "seed": seed},
+                run=f"and{n}",
+            )
+            all_runs = await launch(
+                node,
+                "bench_and",
+                names,
+                {"rounds": max(5, rounds // 4), "designated": False, "seed": seed},
+                run=f"all{n}",
+            )
         finally:
             for p in procs:
                 p.kill()
@@ -103,15 +122,20 @@ async def measure(n: int, rounds: int, seed: int) -> dict[str, float]:
 async def main(args: argparse.Namespace) -> None:
     figures: dict[str, float] = {}
     print(f"seed {args.seed}, {args.rounds} rounds per collective")
-    print(f"{'n':>3} {'OR p50':>8} {'OR p99':>8} {'AND p50':>8} {'AND p99':>8} "
-          f"{'OR msgs':>8} {'<=2n':>5} {'AND-d':>6} {'<=2(n-1)':>8} {'AND-all':>8} "
-          f"{'2n(n-1)':>8} {'n^2':>5}")
+    print(
+        f"{'n':>3} {'OR p50':>8} {'OR p99':>8} {'AND p50':>8} {'AND p99':>8} "
+        f"{'OR msgs':>8} {'<=2n':>5} {'AND-d':>6} {'<=2(n-1)':>8} {'AND-all':>8} "
+        f"{'2n(n-1)':>8} {'n^2':>5}"
+    )
     for n in args.sizes:
         r = await measure(n, args.rounds, args.seed)
-        print(f"{n:>3} {r['or_p50_ms']:>8.2f} {r['or_p99_ms']:>8.2f} {r['and_p50_ms']:>8.2f} "
-              f"{r['and_p99_ms']:>8.2f} {r['or_msgs']:>8.1f} {2 * n:>5} "
-              f"{r['and_designated_msgs']:>6.1f} {2 * (n - 1):>8} {r['and_all_msgs']:>8.1f} "
-              f"{2 * n * (n - 1):>8} {n * n:>5}", flush=True)
+        print(
+            f"{n:>3} {r['or_p50_ms']:>8.2f} {r['or_p99_ms']:>8.2f} {r['and_p50_ms']:>8.2f} "
+            f"{r['and_p99_ms']:>8.2f} {r['or_msgs']:>8.1f} {2 * n:>5} "
+            f"{r['and_designated_msgs']:>6.1f} {2 * (n - 1):>8} {r['and_all_msgs']:>8.1f} "
+            f"{2 * n * (n - 1):>8} {n * n:>5}",
+            flush=True,
+        )
         for key, value in r.items():
             figures[f"{key}_{n}"] = value
     print(json.dumps(figures))
@@ -119,8 +143,7 @@ async def main(args: argparse.Namespace) -> None:
 
 if __name__ == "__main__":
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--sizes", type=lambda s: [int(x) for x in s.split(",")],
-                   default=[2, 5, 10, 20])
+    p.add_argument("--sizes", type=lambda s: [int(x) for x in s.split(",")], default=[2, 5, 10, 20])
     p.add_argument("--rounds", type=int, default=40)
     p.add_argument("--seed", type=int, default=1)
     asyncio.run(main(p.parse_args()))

@@ -62,8 +62,9 @@ async def receive(name: str, mode: str) -> None:
     loop = asyncio.get_running_loop()
     count = 0
     first = last = 0.0
-    async with Node(name, Team.from_env(), config=NodeConfig.from_env(),
-                    locator=FixedLocator(1.0, 0.0)) as node:
+    async with Node(
+        name, Team.from_env(), config=NodeConfig.from_env(), locator=FixedLocator(1.0, 0.0)
+    ) as node:
         if mode == "raw":
             items: deque[Any] = deque()
             pending = [False]
@@ -120,8 +121,13 @@ async def receive(name: str, mode: str) -> None:
 
 async def spawn(args: list[str], env: dict[str, str]) -> asyncio.subprocess.Process:
     proc = await asyncio.create_subprocess_exec(
-        sys.executable, __file__, *args, env=env,
-        stdin=asyncio.subprocess.PIPE, stdout=asyncio.subprocess.PIPE)
+        sys.executable,
+        __file__,
+        *args,
+        env=env,
+        stdin=asyncio.subprocess.PIPE,
+        stdout=asyncio.subprocess.PIPE,
+    )
     assert proc.stdout is not None
     async with asyncio.timeout(30):
         while not (await proc.stdout.readline()).startswith(b"READY"):
@@ -148,14 +154,19 @@ async def measure_rpc(node: Node, rounds: int) -> dict[str, Any]:
         raw: list[float] = []
         mover: list[float] = []
         for _ in range(3):  # warm-up
-            session.get(RAW_KEY, payload=payload, consolidation=zenoh.ConsolidationMode.NONE,
-                        express=True).recv()
+            session.get(
+                RAW_KEY, payload=payload, consolidation=zenoh.ConsolidationMode.NONE, express=True
+            ).recv()
             await node.call("server", "echo", payload)
         for _ in range(rounds):
             for _ in range(per_round):
                 t = time.perf_counter()
-                reply = session.get(RAW_KEY, payload=payload, express=True,
-                                    consolidation=zenoh.ConsolidationMode.NONE).recv()
+                reply = session.get(
+                    RAW_KEY,
+                    payload=payload,
+                    express=True,
+                    consolidation=zenoh.ConsolidationMode.NONE,
+                ).recv()
                 raw.append(time.perf_counter() - t)
                 assert reply.ok is not None and len(reply.ok.payload.to_bytes()) == size
             for _ in range(per_round):
@@ -164,24 +175,32 @@ async def measure_rpc(node: Node, rounds: int) -> dict[str, Any]:
                 mover.append(time.perf_counter() - t)
                 assert len(echoed) == size
         out[label] = {
-            "raw_p50": pct(raw, 50), "raw_p99": pct(raw, 99),
-            "mover_p50": pct(mover, 50), "mover_p99": pct(mover, 99), "n": len(raw),
+            "raw_p50": pct(raw, 50),
+            "raw_p99": pct(raw, 99),
+            "mover_p50": pct(mover, 50),
+            "mover_p99": pct(mover, 99),
+            "n": len(raw),
         }
     return out
 
 
-async def measure_flood(node: Node, env: dict[str, str], mode: str, receivers: int,
-                        seconds: float) -> dict[str, float]:
-    procs = await asyncio.gather(*(
-        spawn(["--role", "receive", "--name", f"rx{i}", "--mode", mode], env)
-        for i in range(receivers)))
+async def measure_flood(
+    node: Node, env: dict[str, str], mode: str, receivers: int, seconds: float
+) -> dict[str, float]:
+    procs = await asyncio.gather(
+        *(
+            spawn(["--role", "receive", "--name", f"rx{i}", "--mode", mode], env)
+            for i in range(receivers)
+        )
+    )
     try:
         await node.team.wait_for({f"rx{i}" for i in range(receivers)}, timeout=30)
         await asyncio.sleep(1.0)  # subscriptions propagate
         payload = os.urandom(64)
         sent = 0
         publisher = node.zenoh_session.declare_publisher(
-            FLOOD_KEY, congestion_control=zenoh.CongestionControl.BLOCK)
+            FLOOD_KEY, congestion_control=zenoh.CongestionControl.BLOCK
+        )
         deadline = time.perf_counter() + seconds
         while time.perf_counter() < deadline:
             for _ in range(200):
@@ -196,8 +215,12 @@ async def measure_flood(node: Node, env: dict[str, str], mode: str, receivers: i
         stats = [await node.call(f"rx{i}", "stats", timeout=10) for i in range(receivers)]
         rates = [c / d for c, d in stats if d > 0]
         delivered = sum(c for c, _ in stats)
-        return {"msgs_per_s": sum(rates), "sent": sent, "delivered": delivered,
-                "delivered_fraction": delivered / max(1, sent * receivers)}
+        return {
+            "msgs_per_s": sum(rates),
+            "sent": sent,
+            "delivered": delivered,
+            "delivered_fraction": delivered / max(1, sent * receivers),
+        }
     finally:
         await stop(list(procs))
 
@@ -208,24 +231,34 @@ async def coordinate(args: argparse.Namespace) -> None:
     env = dict(os.environ)
     env.update(team.env())
     env.update(NodeConfig(connect=(f"tcp/127.0.0.1:{port}",)).env())
-    async with Node("client", team, config=NodeConfig(listen=(f"tcp/127.0.0.1:{port}",)),
-                    locator=FixedLocator(0.0, 0.0)) as node:
+    async with Node(
+        "client",
+        team,
+        config=NodeConfig(listen=(f"tcp/127.0.0.1:{port}",)),
+        locator=FixedLocator(0.0, 0.0),
+    ) as node:
         server = await spawn(["--role", "serve"], env)
         try:
             await node.team.wait_for({"server"}, timeout=30)
             rpc = await measure_rpc(node, args.rounds)
         finally:
             await stop([server])
-        flood = {mode: await measure_flood(node, env, mode, args.receivers, args.flood_seconds)
-                 for mode in ("raw", "mover")}
+        flood = {
+            mode: await measure_flood(node, env, mode, args.receivers, args.flood_seconds)
+            for mode in ("raw", "mover")
+        }
     for label, r in rpc.items():
-        print(f"RPC {label:>5}: raw get->queryable p50 {r['raw_p50']:.3f} ms p99 "
-              f"{r['raw_p99']:.3f} ms | mover call p50 {r['mover_p50']:.3f} ms p99 "
-              f"{r['mover_p99']:.3f} ms | ratio p50 {r['mover_p50'] / r['raw_p50']:.2f} "
-              f"(n={r['n']} each)")
+        print(
+            f"RPC {label:>5}: raw get->queryable p50 {r['raw_p50']:.3f} ms p99 "
+            f"{r['raw_p99']:.3f} ms | mover call p50 {r['mover_p50']:.3f} ms p99 "
+            f"{r['mover_p99']:.3f} ms | ratio p50 {r['mover_p50'] / r['raw_p50']:.2f} "
+            f"(n={r['n']} each)"
+        )
     for mode, f in flood.items():
-        print(f"flood {mode:>5}: {f['msgs_per_s']:,.0f} delivered msgs/s over {args.receivers} "
-              f"receivers ({f['delivered_fraction']:.1%} of {f['sent']:,} sent x receivers)")
+        print(
+            f"flood {mode:>5}: {f['msgs_per_s']:,.0f} delivered msgs/s over {args.receivers} "
+            f"receivers ({f['delivered_fraction']:.1%} of {f['sent']:,} sent x receivers)"
+        )
     figures = {
         "rpc_p50_ms_raw": round(rpc["64B"]["raw_p50"], 4),
         "rpc_p99_ms_raw": round(rpc["64B"]["raw_p99"], 4),

@@ -23,12 +23,24 @@ if TYPE_CHECKING:
 
 
 def _team_options(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--team", help="team name (default: $MOVER_TEAM); the key comes from "
-                   "$MOVER_TEAM_KEY or $MOVER_TEAM_KEY_FILE")
-    p.add_argument("--connect", action="append", metavar="ENDPOINT",
-                   help="zenoh endpoint of a team member or router; repeatable")
-    p.add_argument("--wait", type=float, default=2.0, metavar="S",
-                   help="seconds to wait for the team to be discovered (default 2)")
+    p.add_argument(
+        "--team",
+        help="team name (default: $MOVER_TEAM); the key comes from "
+        "$MOVER_TEAM_KEY or $MOVER_TEAM_KEY_FILE",
+    )
+    p.add_argument(
+        "--connect",
+        action="append",
+        metavar="ENDPOINT",
+        help="zenoh endpoint of a team member or router; repeatable",
+    )
+    p.add_argument(
+        "--wait",
+        type=float,
+        default=2.0,
+        metavar="S",
+        help="seconds to wait for the team to be discovered (default 2)",
+    )
 
 
 def _open(args: argparse.Namespace) -> tuple[Team, NodeConfig]:
@@ -38,9 +50,12 @@ def _open(args: argparse.Namespace) -> tuple[Team, NodeConfig]:
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     if args.connect:
-        config = NodeConfig(mode=config.mode, listen=config.listen,
-                            connect=config.connect + tuple(args.connect),
-                            overrides=config.overrides)
+        config = NodeConfig(
+            mode=config.mode,
+            listen=config.listen,
+            connect=config.connect + tuple(args.connect),
+            overrides=config.overrides,
+        )
     return team, config
 
 
@@ -63,15 +78,25 @@ def run_ps(args: argparse.Namespace) -> int:
 async def _ps(team: Team, config: NodeConfig, args: argparse.Namespace) -> int:
     from ._node import Node
 
-    async with Node(f"ps-{secrets.token_hex(3)}", team, kind="tool", config=config,
-                    observer=True) as node:
+    async with Node(
+        f"ps-{secrets.token_hex(3)}", team, kind="tool", config=config, observer=True
+    ) as node:
         await asyncio.sleep(args.wait)
         infos = [node.team.info(n) for n in sorted(node.team.members())]
     rows = [i for i in infos if i is not None]
     if args.json:
         for i in rows:
-            print(json.dumps({"name": i.name, "kind": i.kind, "uptime_s": round(i.uptime, 1),
-                              "pid": i.pid, "host": i.host}))
+            print(
+                json.dumps(
+                    {
+                        "name": i.name,
+                        "kind": i.kind,
+                        "uptime_s": round(i.uptime, 1),
+                        "pid": i.pid,
+                        "host": i.host,
+                    }
+                )
+            )
         return 0
     if not rows:
         print(f"no members of team {team.name!r} seen within {args.wait} s", file=sys.stderr)
@@ -92,8 +117,11 @@ def _duration(seconds: float) -> str:
 
 def register_call(sub: Sub) -> None:
     """Add ``mover call``."""
-    p = sub.add_parser("call", help="call a robot's exported procedure",
-                       description="Arguments are JSON values: 3, 1.5, '\"text\"', '[1, 2]'.")
+    p = sub.add_parser(
+        "call",
+        help="call a robot's exported procedure",
+        description="Arguments are JSON values: 3, 1.5, '\"text\"', '[1, 2]'.",
+    )
     p.add_argument("robot")
     p.add_argument("procedure")
     p.add_argument("args", nargs="*", metavar="JSON", help="positional arguments, each JSON")
@@ -121,26 +149,37 @@ def _json(text: str, what: str) -> Any:
     try:
         return json.loads(text)
     except json.JSONDecodeError as exc:
-        raise UsageError(f"{what} is not JSON ({exc.msg}): {text!r}; quote strings as "
-                         "'\"text\"'") from None
+        raise UsageError(
+            f"{what} is not JSON ({exc.msg}): {text!r}; quote strings as '\"text\"'"
+        ) from None
 
 
-async def _call(team: Team, config: NodeConfig, args: argparse.Namespace,
-                positional: list[Any], kwargs: dict[str, Any]) -> int:
+async def _call(
+    team: Team,
+    config: NodeConfig,
+    args: argparse.Namespace,
+    positional: list[Any],
+    kwargs: dict[str, Any],
+) -> int:
     from ._node import Node
 
-    async with Node(f"cli-{secrets.token_hex(3)}", team, kind="tool", config=config,
-                    observer=True) as node:
+    async with Node(
+        f"cli-{secrets.token_hex(3)}", team, kind="tool", config=config, observer=True
+    ) as node:
         try:
             await node.team.wait_for({args.robot}, timeout=args.wait)
         except TimeoutError:
             seen = ", ".join(sorted(node.team.members())) or "none"
-            print(f"mover call: no member {args.robot!r} in team {team.name!r} "
-                  f"(members seen: {seen})", file=sys.stderr)
+            print(
+                f"mover call: no member {args.robot!r} in team {team.name!r} "
+                f"(members seen: {seen})",
+                file=sys.stderr,
+            )
             return 1
         try:
-            result = await node.call(args.robot, args.procedure, *positional,
-                                     timeout=args.timeout, **kwargs)
+            result = await node.call(
+                args.robot, args.procedure, *positional, timeout=args.timeout, **kwargs
+            )
         except CallError as exc:
             print(f"mover call: {type(exc).__name__}: {exc}", file=sys.stderr)
             return 1
@@ -189,16 +228,22 @@ def run_keygen(args: argparse.Namespace) -> int:
 
 def register_run(sub: Sub) -> None:
     """Add ``mover run``."""
-    p = sub.add_parser("run", help="start an installed program on members of a team",
-                       description="Starts PROGRAM on every chosen member (no code is sent: "
-                       "members run their installed copy), shows progress, and prints each "
-                       "member's outcome. The launcher is not a coordinator: with --detach it "
-                       "exits once the run has started.")
+    p = sub.add_parser(
+        "run",
+        help="start an installed program on members of a team",
+        description="Starts PROGRAM on every chosen member (no code is sent: "
+        "members run their installed copy), shows progress, and prints each "
+        "member's outcome. The launcher is not a coordinator: with --detach it "
+        "exits once the run has started.",
+    )
     p.add_argument("program")
-    p.add_argument("--robots", help="comma-separated members (default: every member that is "
-                   "not a tool or a world)")
-    p.add_argument("--args", metavar="JSON", default="{}",
-                   help="the program's arguments as a JSON object")
+    p.add_argument(
+        "--robots",
+        help="comma-separated members (default: every member that is not a tool or a world)",
+    )
+    p.add_argument(
+        "--args", metavar="JSON", default="{}", help="the program's arguments as a JSON object"
+    )
     p.add_argument("--detach", action="store_true", help="exit once the run has started")
     p.add_argument("--run-id", help="name of the run (default: PROGRAM-<random>)")
     _team_options(p)
@@ -211,24 +256,31 @@ def run_run(args: argparse.Namespace) -> int:
         raise UsageError("--args must be a JSON object")
     try:
         check_name("program", args.program)
-        robots = [check_name("robot", r) for r in args.robots.split(",") if r] \
-            if args.robots else None
+        robots = (
+            [check_name("robot", r) for r in args.robots.split(",") if r] if args.robots else None
+        )
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     team, config = _open(args)
     return asyncio.run(_run(team, config, args, robots, kwargs))
 
 
-async def _run(team: Team, config: NodeConfig, args: argparse.Namespace,
-               robots: list[str] | None, kwargs: dict[str, Any]) -> int:
+async def _run(
+    team: Team,
+    config: NodeConfig,
+    args: argparse.Namespace,
+    robots: list[str] | None,
+    kwargs: dict[str, Any],
+) -> int:
     import time
 
     from ._node import Node
     from ._programs import PROGRESS_TOPIC, launch
 
     run = args.run_id or f"{args.program}-{secrets.token_hex(3)}"
-    async with Node(f"run-{secrets.token_hex(3)}", team, kind="tool", config=config,
-                    observer=True) as node:
+    async with Node(
+        f"run-{secrets.token_hex(3)}", team, kind="tool", config=config, observer=True
+    ) as node:
         try:
             if robots:
                 await node.team.wait_for(robots, timeout=args.wait)
@@ -239,8 +291,10 @@ async def _run(team: Team, config: NodeConfig, args: argparse.Namespace,
             print(f"mover run: not in team {team.name!r}: {', '.join(missing)}", file=sys.stderr)
             return 1
         members = robots or sorted(
-            n for n in node.team.members()
-            if (i := node.team.info(n)) is not None and i.kind not in ("tool", "world"))
+            n
+            for n in node.team.members()
+            if (i := node.team.info(n)) is not None and i.kind not in ("tool", "world")
+        )
         if not members:
             print(f"mover run: no members in team {team.name!r}", file=sys.stderr)
             return 1
@@ -251,14 +305,18 @@ async def _run(team: Team, config: NodeConfig, args: argparse.Namespace,
             async for m in progress:
                 info = {k: v for k, v in m.data.items() if k not in ("member", "phase")}
                 extra = " ".join(f"{k}={_short(v)}" for k, v in info.items())
-                print(f"[{time.monotonic() - started:6.1f}s] {m.data.get('member')}: "
-                      f"{m.data.get('phase')} {extra}".rstrip(), flush=True)
+                print(
+                    f"[{time.monotonic() - started:6.1f}s] {m.data.get('member')}: "
+                    f"{m.data.get('phase')} {extra}".rstrip(),
+                    flush=True,
+                )
 
         shower = asyncio.create_task(show())
         print(f"run {run}: {args.program} on {', '.join(members)}", flush=True)
         try:
-            outcomes = await launch(node, args.program, members, kwargs, run=run,
-                                    wait=not args.detach)
+            outcomes = await launch(
+                node, args.program, members, kwargs, run=run, wait=not args.detach
+            )
         except CallError as exc:
             print(f"mover run: {type(exc).__name__}: {exc}", file=sys.stderr)
             return 1

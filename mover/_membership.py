@@ -172,8 +172,9 @@ class Membership:
                 p = env.payload
                 if env.kind != "hello" or env.sender != name or p.get("challenge") != challenge:
                     raise WireError("hello does not answer our challenge")
-                info = MemberInfo(name, str(p["kind"]), float(p["started"]), int(p["pid"]),
-                                  str(p["host"]))
+                info = MemberInfo(
+                    name, str(p["kind"]), float(p["started"]), int(p["pid"]), str(p["host"])
+                )
             except (WireError, AttributeError, KeyError, TypeError, ValueError) as exc:
                 node._refusal_log.warn(name, f"hello from {name!r} refused: {exc}")
                 return
@@ -183,8 +184,12 @@ class Membership:
 
         def on_done(_: Any) -> None:
             if not state["ok"] and name in self._tokens:
-                log.warning("%s: %r holds a liveliness token but is not a verified member "
-                            "of team %r", node.name, name, node.team_name)
+                log.warning(
+                    "%s: %r holds a liveliness token but is not a verified member of team %r",
+                    node.name,
+                    name,
+                    node.team_name,
+                )
 
         node._session.get(
             _keys.hello(node.team_name, name),
@@ -202,7 +207,12 @@ class Membership:
             info = self.self_info()
             frame = node._sealer.seal(
                 "hello",
-                {"challenge": challenge, "kind": info.kind, "started": info.started,
-                 "pid": info.pid, "host": info.host},
+                {
+                    "challenge": challenge,
+                    "kind": info.kind,
+                    "started": info.started,
+                    "pid": info.pid,
+                    "host": info.host,
+                },
             )
             query.reply(_keys.hello(node.team_name, node.name), frame)

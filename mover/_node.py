@@ -123,17 +123,21 @@ class Node:
         team, portal, session = self.team_config.name, self._portal, self._session
         self.team.on_leave(self._member_left)
         self._declared += [
-            session.declare_queryable(_keys.rpc(team, self.name),
-                                      portal.callback(self._server.on_query), complete=True),
+            session.declare_queryable(
+                _keys.rpc(team, self.name), portal.callback(self._server.on_query), complete=True
+            ),
             session.declare_subscriber(_keys.ctl(team, self.name), portal.callback(self._on_ctl)),
-            session.declare_queryable(_keys.hello(team, self.name),
-                                      portal.callback(self.team.on_hello_query)),
+            session.declare_queryable(
+                _keys.hello(team, self.name), portal.callback(self.team.on_hello_query)
+            ),
         ]
         if not self.observer:
-            self._declared.append(
-                session.liveliness().declare_token(_keys.alive(team, self.name)))
-        self._declared.append(session.liveliness().declare_subscriber(
-            _keys.alive(team, "*"), portal.callback(self.team.on_token), history=True))
+            self._declared.append(session.liveliness().declare_token(_keys.alive(team, self.name)))
+        self._declared.append(
+            session.liveliness().declare_subscriber(
+                _keys.alive(team, "*"), portal.callback(self.team.on_token), history=True
+            )
+        )
         return self
 
     async def close(self) -> None:
@@ -263,8 +267,9 @@ class Node:
                 while end < len(items) and (end == start or size + len(items[end]) < limit):
                     size += len(items[end])
                     end += 1
-                payload = b"\x92" + pack(topic) + _array_header(end - start) + b"".join(
-                    items[start:end])
+                payload = (
+                    b"\x92" + pack(topic) + _array_header(end - start) + b"".join(items[start:end])
+                )
                 pub.put(self._sealer.seal_packed("bc", payload))
                 self.stats["sent.bc_frames"] += 1
                 start = end
@@ -275,7 +280,8 @@ class Node:
         if pub is None:
             congestion = zenoh.CongestionControl.BLOCK if reliable else zenoh.CongestionControl.DROP
             pub = self._session.declare_publisher(
-                _keys.broadcast(self.team_name, topic), congestion_control=congestion)
+                _keys.broadcast(self.team_name, topic), congestion_control=congestion
+            )
             self._publishers[(topic, reliable)] = pub
         return pub
 
@@ -288,7 +294,8 @@ class Node:
         if entry is None:
             assert self._portal is not None
             zsub = self._session.declare_subscriber(
-                _keys.broadcast(self.team_config.name, topic), self._portal.callback(self._on_bc))
+                _keys.broadcast(self.team_config.name, topic), self._portal.callback(self._on_bc)
+            )
             entry = (zsub, [])
             self._subs[topic] = entry
         entry[1].append(sub)

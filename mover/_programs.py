@@ -39,8 +39,11 @@ class RunTeam(TaskTeam):
 
     async def report(self, phase: str, **info: Any) -> None:
         """Tell the launcher (and anyone listening) how this member is doing."""
-        await self.node.broadcast(f"{PROGRESS_TOPIC}/{self.run}",
-                                  {"member": self.me, "phase": phase, **info}, reliable=True)
+        await self.node.broadcast(
+            f"{PROGRESS_TOPIC}/{self.run}",
+            {"member": self.me, "phase": phase, **info},
+            reliable=True,
+        )
 
 
 @dataclass
@@ -53,9 +56,16 @@ class _Run:
 class ProgramHost:
     """Hosts installed programs on one node."""
 
-    def __init__(self, node: Node, programs: Mapping[str, Callable[..., Any]], robot: Any,
-                 *, policy: Policy = "fail", join_timeout: float = 10.0,
-                 ready: bool = True) -> None:
+    def __init__(
+        self,
+        node: Node,
+        programs: Mapping[str, Callable[..., Any]],
+        robot: Any,
+        *,
+        policy: Policy = "fail",
+        join_timeout: float = 10.0,
+        ready: bool = True,
+    ) -> None:
         self.node = node
         self.join_timeout = join_timeout
         self.ready = asyncio.Event()  # programs wait for it: set once ``robot`` is usable
@@ -74,8 +84,10 @@ class ProgramHost:
         """Start ``program`` as run ``run`` among ``members`` (returns once started)."""
         fn = self.programs.get(program)
         if fn is None:
-            raise UnknownProcedure(f"no program {program!r} installed on {self.node.name!r} "
-                                   f"(installed: {', '.join(sorted(self.programs)) or 'none'})")
+            raise UnknownProcedure(
+                f"no program {program!r} installed on {self.node.name!r} "
+                f"(installed: {', '.join(sorted(self.programs)) or 'none'})"
+            )
         if run in self.runs:
             raise BadArguments(f"run {run!r} was already started here")
         if self.node.name not in members:
@@ -86,12 +98,19 @@ class ProgramHost:
             raise BadArguments(f"program {program!r}: {exc}") from None
         team = RunTeam(self.node, run, members, collectives=self.collectives)
         task = asyncio.get_running_loop().create_task(
-            self._run(fn, team, positional, kwargs, members))
+            self._run(fn, team, positional, kwargs, members)
+        )
         self.runs[run] = _Run(program, task, team)
         log.info("%s: started %s as run %s among %s", self.node.name, program, run, members)
 
-    async def _run(self, fn: Callable[..., Any], team: RunTeam, args: list[Any],
-                   kwargs: dict[str, Any], members: list[str]) -> Any:
+    async def _run(
+        self,
+        fn: Callable[..., Any],
+        team: RunTeam,
+        args: list[Any],
+        kwargs: dict[str, Any],
+        members: list[str],
+    ) -> Any:
         try:
             # Every member starts from the same view of the team (the designated members).
             await self.node.team.wait_for(members, timeout=self.join_timeout)
@@ -101,8 +120,9 @@ class ProgramHost:
         except asyncio.CancelledError:
             raise
         except Exception as exc:
-            log.warning("%s: run %s failed: %s: %s", self.node.name, team.run,
-                        type(exc).__name__, exc)
+            log.warning(
+                "%s: run %s failed: %s: %s", self.node.name, team.run, type(exc).__name__, exc
+            )
             await team.report("failed", error=f"{type(exc).__name__}: {exc}")
             raise
         await team.report("done")
@@ -120,8 +140,7 @@ class ProgramHost:
                 return {"error": "cancelled"}
             raise
         except Exception as exc:
-            return {"error": f"{type(exc).__name__}: {exc}",
-                    "steps": _metrics(entry.team)}
+            return {"error": f"{type(exc).__name__}: {exc}", "steps": _metrics(entry.team)}
         return {"result": result, "steps": _metrics(entry.team)}
 
     def installed(self) -> dict[str, str]:
@@ -152,16 +171,16 @@ async def launch(
 
     Raises the first CallError of a start that fails (unknown program, bad arguments, refused).
     """
-    await asyncio.gather(*(node.call(m, "mover.start", program, run, members, args, timeout=10)
-                           for m in members))
+    await asyncio.gather(
+        *(node.call(m, "mover.start", program, run, members, args, timeout=10) for m in members)
+    )
     if not wait:
         return {}
 
     async def outcome(member: str) -> dict[str, Any]:
         while True:
             try:
-                result: dict[str, Any] = await node.call(member, "mover.outcome", run,
-                                                         timeout=None)
+                result: dict[str, Any] = await node.call(member, "mover.outcome", run, timeout=None)
                 return result
             except (RobotLost, UnknownRobot) as exc:
                 if not await wait_reachable(node, member):

@@ -29,23 +29,40 @@ from ._keys import check_name
 
 # Every message kind a team member needs on the team's keys.
 _TEAM_MESSAGES = [
-    "put", "delete", "declare_subscriber", "query", "declare_queryable", "reply",
-    "liveliness_token", "liveliness_query", "declare_liveliness_subscriber",
+    "put",
+    "delete",
+    "declare_subscriber",
+    "query",
+    "declare_queryable",
+    "reply",
+    "liveliness_token",
+    "liveliness_query",
+    "declare_liveliness_subscriber",
 ]
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Add the ``router`` verb."""
-    p = sub.add_parser("router", help="run a zenoh router, or write a secured config for one",
-                       description=__doc__.split("\n\n")[0])
-    p.add_argument("--listen", action="append", metavar="ENDPOINT",
-                   help="endpoint to listen on (default tcp/0.0.0.0:7447); repeatable")
+    p = sub.add_parser(
+        "router",
+        help="run a zenoh router, or write a secured config for one",
+        description=__doc__.split("\n\n")[0],
+    )
+    p.add_argument(
+        "--listen",
+        action="append",
+        metavar="ENDPOINT",
+        help="endpoint to listen on (default tcp/0.0.0.0:7447); repeatable",
+    )
     p.add_argument("--config", metavar="FILE", help="a JSON settings file (e.g. router.json)")
     p.add_argument("--gen-config", metavar="DIR", help="write certificates and configs to DIR")
     p.add_argument("--team", help="team name (with --gen-config)")
     p.add_argument("--members", help="comma-separated member names (with --gen-config)")
-    p.add_argument("--host", default="127.0.0.1",
-                   help="router address the members connect to (with --gen-config)")
+    p.add_argument(
+        "--host",
+        default="127.0.0.1",
+        help="router address the members connect to (with --gen-config)",
+    )
     p.add_argument("--port", type=int, default=7448, help="TLS port (with --gen-config)")
     p.set_defaults(func=run)
 
@@ -72,7 +89,8 @@ def run(args: argparse.Namespace) -> int:
         except ValueError as exc:
             raise UsageError(str(exc)) from None
     listen = tuple(args.listen or ()) or (
-        () if "listen/endpoints" in overrides else ("tcp/0.0.0.0:7447",))
+        () if "listen/endpoints" in overrides else ("tcp/0.0.0.0:7447",)
+    )
     config = NodeConfig(mode="router", listen=listen, overrides=overrides)
     serve(config)
     return 0
@@ -86,13 +104,16 @@ def serve(config: NodeConfig) -> None:
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda *_: stop.set())
     with zenoh.open(config.to_zenoh()) as session:
-        print(f"router {session.zid()} listening on {', '.join(config.listen) or 'config'}",
-              flush=True)
+        print(
+            f"router {session.zid()} listening on {', '.join(config.listen) or 'config'}",
+            flush=True,
+        )
         stop.wait()
 
 
-def generate_config(directory: Path, team: str, members: list[str], host: str,
-                    port: int) -> list[Path]:
+def generate_config(
+    directory: Path, team: str, members: list[str], host: str, port: int
+) -> list[Path]:
     """Write a CA, certificates and router/member configs for ``team``; return the files."""
     directory.mkdir(parents=True, exist_ok=True)
     ca_key, ca_cert = _certificate(f"mover {team} CA", None, host, ca=True)
@@ -121,10 +142,15 @@ def generate_config(directory: Path, team: str, members: list[str], host: str,
         "access_control": {
             "enabled": True,
             "default_permission": "deny",
-            "rules": [{
-                "id": "team", "messages": _TEAM_MESSAGES, "flows": ["ingress", "egress"],
-                "permission": "allow", "key_exprs": [f"mover/{team}/**"],
-            }],
+            "rules": [
+                {
+                    "id": "team",
+                    "messages": _TEAM_MESSAGES,
+                    "flows": ["ingress", "egress"],
+                    "permission": "allow",
+                    "key_exprs": [f"mover/{team}/**"],
+                }
+            ],
             "subjects": [{"id": "members", "cert_common_names": members}],
             "policies": [{"id": "team", "rules": ["team"], "subjects": ["members"]}],
         },
@@ -148,8 +174,9 @@ def generate_config(directory: Path, team: str, members: list[str], host: str,
     return written
 
 
-def _certificate(common_name: str, issuer: tuple[Any, Any] | None, host: str,
-                 ca: bool = False) -> tuple[Any, Any]:
+def _certificate(
+    common_name: str, issuer: tuple[Any, Any] | None, host: str, ca: bool = False
+) -> tuple[Any, Any]:
     from cryptography import x509
     from cryptography.hazmat.primitives import hashes
     from cryptography.hazmat.primitives.asymmetric import ec
@@ -175,7 +202,8 @@ def _certificate(common_name: str, issuer: tuple[Any, Any] | None, host: str,
     )
     if not ca:
         builder = builder.add_extension(
-            x509.SubjectAlternativeName([alt, x509.DNSName("localhost")]), critical=False)
+            x509.SubjectAlternativeName([alt, x509.DNSName("localhost")]), critical=False
+        )
     return key, builder.sign(issuer_key, hashes.SHA256())
 
 
@@ -183,7 +211,11 @@ def _pem(obj: Any) -> bytes:
     from cryptography.hazmat.primitives import serialization
 
     if hasattr(obj, "private_bytes"):
-        return bytes(obj.private_bytes(serialization.Encoding.PEM,
-                                       serialization.PrivateFormat.PKCS8,
-                                       serialization.NoEncryption()))
+        return bytes(
+            obj.private_bytes(
+                serialization.Encoding.PEM,
+                serialization.PrivateFormat.PKCS8,
+                serialization.NoEncryption(),
+            )
+        )
     return bytes(obj.public_bytes(serialization.Encoding.PEM))

@@ -143,21 +143,29 @@ class RpcServer:
     ) -> dict[str, Any] | tuple[Exported, list[Any], dict[str, Any]]:
         """The procedure and its checked arguments, or the error to reply with."""
         payload = env.payload
-        if not (isinstance(payload, list) and len(payload) == 3 and isinstance(payload[0], str)
-                and isinstance(payload[1], list) and isinstance(payload[2], dict)):
+        if not (
+            isinstance(payload, list)
+            and len(payload) == 3
+            and isinstance(payload[0], str)
+            and isinstance(payload[1], list)
+            and isinstance(payload[2], dict)
+        ):
             return _err("BadArguments", "a call must carry [procedure, args, kwargs]")
         name, args, kwargs = payload
         exported = self.exports.get(name)
         if exported is None:
             log.warning("%s: %r called unknown procedure %r", self.node.name, env.sender, name)
             known = ", ".join(sorted(self.exports)) or "none"
-            return _err("UnknownProcedure", f"{self.node.name!r} exports no procedure "
-                        f"{name!r} (exported: {known})")
+            return _err(
+                "UnknownProcedure",
+                f"{self.node.name!r} exports no procedure {name!r} (exported: {known})",
+            )
         try:
             args, kwargs = exported.signature.bind(args, kwargs)
         except TypeError as exc:
-            log.warning("%s: bad arguments from %r to %r: %s", self.node.name, env.sender,
-                        name, exc)
+            log.warning(
+                "%s: bad arguments from %r to %r: %s", self.node.name, env.sender, name, exc
+            )
             return _err("BadArguments", f"{name}{exported.signature.describe()}: {exc}")
         return exported, args, kwargs
 
@@ -170,8 +178,9 @@ class RpcServer:
         return result if inspect.isawaitable(result) else {"ok": result}
 
     def _failure(self, exported: Exported, exc: Exception) -> dict[str, Any]:
-        log.info("%s: procedure %r raised %s: %s", self.node.name, exported.name,
-                 type(exc).__name__, exc)
+        log.info(
+            "%s: procedure %r raised %s: %s", self.node.name, exported.name, type(exc).__name__, exc
+        )
         return _err(type(exc).__name__, str(exc))
 
     def _send(self, query: Any, env: Envelope, reply: dict[str, Any]) -> None:
@@ -235,8 +244,9 @@ class RpcClient:
         try:
             node._session.get(
                 _keys.rpc(node.team_name, robot),
-                node._portal.callback(partial(self._on_reply, call_id),
-                                      partial(self._on_done, call_id)),
+                node._portal.callback(
+                    partial(self._on_reply, call_id), partial(self._on_done, call_id)
+                ),
                 payload=frame,
                 consolidation=zenoh.ConsolidationMode.NONE,
                 timeout=(timeout + 1.0) if timeout is not None else _NO_TIMEOUT,
@@ -250,7 +260,8 @@ class RpcClient:
                 self._cancel_remote(robot, call_id)
                 raise CallTimeout(
                     f"{procedure!r} on {robot!r} did not answer within {timeout} s",
-                    robot=robot, procedure=procedure,
+                    robot=robot,
+                    procedure=procedure,
                 ) from None
             except asyncio.CancelledError:
                 if future.cancelled():  # awaiting it was cancelled, not answered
@@ -262,8 +273,9 @@ class RpcClient:
     def _cancel_remote(self, robot: str, call_id: int) -> None:
         node = self.node
         try:
-            node._session.put(_keys.ctl(node.team_name, robot),
-                              node._sealer.seal("cancel", call_id, call_id))
+            node._session.put(
+                _keys.ctl(node.team_name, robot), node._sealer.seal("cancel", call_id, call_id)
+            )
             node.stats["sent.cancel"] += 1
         except Exception as exc:
             log.debug("could not send cancel to %r: %s", robot, exc)
@@ -312,25 +324,33 @@ class RpcClient:
         if p is None or p.future.done():
             return
         if p.refusal is not None:
-            exc: CallError = Refused(f"{p.robot!r} refused the call: {p.refusal}",
-                                     robot=p.robot, procedure=p.procedure)
+            exc: CallError = Refused(
+                f"{p.robot!r} refused the call: {p.refusal}", robot=p.robot, procedure=p.procedure
+            )
         elif p.was_member:
-            exc = RobotLost(f"{p.robot!r} was lost during {p.procedure!r}",
-                            robot=p.robot, procedure=p.procedure)
+            exc = RobotLost(
+                f"{p.robot!r} was lost during {p.procedure!r}", robot=p.robot, procedure=p.procedure
+            )
         else:
-            exc = UnknownRobot(f"no member {p.robot!r} of team {self.node.team_name!r} answers",
-                               robot=p.robot, procedure=p.procedure)
+            exc = UnknownRobot(
+                f"no member {p.robot!r} of team {self.node.team_name!r} answers",
+                robot=p.robot,
+                procedure=p.procedure,
+            )
         p.future.set_exception(exc)
 
     def robot_left(self, robot: str) -> None:
         for p in self.pending.values():
             if p.robot == robot and not p.future.done():
-                p.future.set_exception(RobotLost(
-                    f"{robot!r} left the team during {p.procedure!r}",
-                    robot=robot, procedure=p.procedure))
+                p.future.set_exception(
+                    RobotLost(
+                        f"{robot!r} left the team during {p.procedure!r}",
+                        robot=robot,
+                        procedure=p.procedure,
+                    )
+                )
 
     def close(self) -> None:
         for p in self.pending.values():
             if not p.future.done():
                 p.future.set_exception(NodeClosed("the node closed during the call"))
-

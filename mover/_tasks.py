@@ -87,7 +87,8 @@ class _Step:
     claims: list[tuple[str, Any]] = field(default_factory=list)
     results: dict[str, Any] = field(default_factory=dict)
     decision: asyncio.Future[list[Any]] = field(
-        default_factory=lambda: asyncio.get_running_loop().create_future())
+        default_factory=lambda: asyncio.get_running_loop().create_future()
+    )
     takeover: bool = False  # this member took over from a designated member that is gone
     lost: list[str] = field(default_factory=list)  # members already gone when it took over
 
@@ -122,8 +123,9 @@ class Collectives:
     def _expected(self, state: _Step) -> set[str]:
         return {m for m in state.members if m in self.node.team}
 
-    async def or_join(self, run: str, step: int, member: str, members: list[str],
-                      known: list[Any] | None = None) -> list[Any]:
+    async def or_join(
+        self, run: str, step: int, member: str, members: list[str], known: list[Any] | None = None
+    ) -> list[Any]:
         """A member waits for the decision (and tells what it knows after a takeover)."""
         state = self.step(run, step, members)
         state.joined.add(member)
@@ -132,8 +134,9 @@ class Collectives:
         self._maybe_decide(state)
         return await asyncio.shield(state.decision)
 
-    async def or_claim(self, run: str, step: int, member: str, members: list[str],
-                       result: Any) -> list[Any]:
+    async def or_claim(
+        self, run: str, step: int, member: str, members: list[str], result: Any
+    ) -> list[Any]:
         """A member finished its operation: it wins unless someone claimed first."""
         state = self.step(run, step, members)
         state.joined.add(member)
@@ -155,8 +158,9 @@ class Collectives:
             winner, result = state.claims[0]
             state.decision.set_result(["won", winner, result])
 
-    async def and_done(self, run: str, step: int, member: str, members: list[str],
-                       result: Any) -> list[Any]:
+    async def and_done(
+        self, run: str, step: int, member: str, members: list[str], result: Any
+    ) -> list[Any]:
         """A member finished: record its result; answer when every live member has."""
         state = self.step(run, step, members)
         state.results[member] = result
@@ -207,9 +211,16 @@ class TaskTeam:
     member). ``stall_timeout`` bounds how long a step waits for lost links to come back.
     """
 
-    def __init__(self, node: Node, run: str, members: Sequence[str], *,
-                 collectives: Collectives | None = None, policy: Policy = "fail",
-                 stall_timeout: float = 60.0) -> None:
+    def __init__(
+        self,
+        node: Node,
+        run: str,
+        members: Sequence[str],
+        *,
+        collectives: Collectives | None = None,
+        policy: Policy = "fail",
+        stall_timeout: float = 60.0,
+    ) -> None:
         if node.name not in members:
             raise ValueError(f"{node.name!r} is not one of the members {list(members)!r}")
         self.node = node
@@ -245,8 +256,10 @@ class TaskTeam:
             await asyncio.gather(op, return_exceptions=True)  # the losers' cleanup runs here
         metrics.continued = time.perf_counter()
         if decision[0] == "lost":
-            raise MemberLost(f"step {metrics.step} of run {self.run!r} lost {decision[1]}",
-                             members=frozenset(decision[1]))
+            raise MemberLost(
+                f"step {metrics.step} of run {self.run!r} lost {decision[1]}",
+                members=frozenset(decision[1]),
+            )
         outcome = Outcome(decision[1], decision[2])
         return await continuation(outcome) if continuation else outcome
 
@@ -259,19 +272,26 @@ class TaskTeam:
                 if op.done() and not op.cancelled() and op.exception() is None:
                     metrics.finished = metrics.finished or time.perf_counter()
                     decision: list[Any] = await self._ask(
-                        metrics, designated, "mover.or_claim", *args, op.result())
+                        metrics, designated, "mover.or_claim", *args, op.result()
+                    )
                     return decision
                 poll = asyncio.ensure_future(
-                    self._ask(metrics, designated, "mover.or_join", *args, known))
+                    self._ask(metrics, designated, "mover.or_join", *args, known)
+                )
                 poll.add_done_callback(_quiet)
-                await asyncio.wait({poll} if op.done() else {poll, op},
-                                   return_when=asyncio.FIRST_COMPLETED)
+                await asyncio.wait(
+                    {poll} if op.done() else {poll, op}, return_when=asyncio.FIRST_COMPLETED
+                )
                 if poll.done():
                     decision = poll.result()
                     return decision
                 if op.exception() is not None:
-                    log.warning("%s: the operation of step %d failed: %r", self.me,
-                                metrics.step, op.exception())
+                    log.warning(
+                        "%s: the operation of step %d failed: %r",
+                        self.me,
+                        metrics.step,
+                        op.exception(),
+                    )
                 # Loop round to claim; the poll stays open and its answer is not waited for.
             except _Retry as retry:
                 known = retry.known or known
@@ -305,8 +325,10 @@ class TaskTeam:
             decision = await self._and_all(metrics, wire)
         metrics.continued = time.perf_counter()
         if decision[0] == "lost":
-            raise MemberLost(f"step {metrics.step} of run {self.run!r} lost {decision[1]}",
-                             members=frozenset(decision[1]))
+            raise MemberLost(
+                f"step {metrics.step} of run {self.run!r} lost {decision[1]}",
+                members=frozenset(decision[1]),
+            )
         if error is not None:
             raise error
         results = {m: _unwire(r) for m, r in decision[1].items()}
@@ -317,8 +339,15 @@ class TaskTeam:
             designated = await self._designated()
             try:
                 decision: list[Any] = await self._ask(
-                    metrics, designated, "mover.and_done", self.run, metrics.step, self.me,
-                    self.members, result)
+                    metrics,
+                    designated,
+                    "mover.and_done",
+                    self.run,
+                    metrics.step,
+                    self.me,
+                    self.members,
+                    result,
+                )
                 return decision
             except _Retry:
                 await self._recover(designated)
@@ -329,8 +358,16 @@ class TaskTeam:
         async def send(member: str) -> None:
             while member in self.node.team or not self.node.connected():
                 try:
-                    await self._ask(metrics, member, "mover.and_put", self.run, metrics.step,
-                                    self.me, self.members, result)
+                    await self._ask(
+                        metrics,
+                        member,
+                        "mover.and_put",
+                        self.run,
+                        metrics.step,
+                        self.me,
+                        self.members,
+                        result,
+                    )
                     return
                 except _Retry:
                     await self._recover(member)
@@ -374,12 +411,15 @@ class TaskTeam:
     async def _recover(self, member: str | Sequence[str]) -> None:
         reachable = await wait_reachable(self.node, member, self.stall_timeout)
         if not reachable and not self.node.connected():
-            raise MemberLost(f"links lost for over {self.stall_timeout} s",
-                             members=frozenset(self.members) - {self.me})
+            raise MemberLost(
+                f"links lost for over {self.stall_timeout} s",
+                members=frozenset(self.members) - {self.me},
+            )
 
 
-async def wait_reachable(node: Node, member: str | Sequence[str],
-                         stall_timeout: float = 60.0) -> bool:
+async def wait_reachable(
+    node: Node, member: str | Sequence[str], stall_timeout: float = 60.0
+) -> bool:
     """After a failed call to ``member``: wait out an outage; True if it is a member again.
 
     A member gone while this node is linked to others is gone (False at once). If this node

@@ -32,8 +32,11 @@ STATE_TOPIC = "world/state"
 
 def register(sub: Any) -> None:
     """Add ``mover demo``."""
-    p = sub.add_parser("demo", help="search and rescue with robot processes in a simulated world",
-                       description=__doc__.split("\n\n")[0])
+    p = sub.add_parser(
+        "demo",
+        help="search and rescue with robot processes in a simulated world",
+        description=__doc__.split("\n\n")[0],
+    )
     p.add_argument("--program", default="search_and_rescue", help="the program to run")
     p.add_argument("--world", default=str(DEFAULT_WORLD), help="the world file")
     p.add_argument("--args", default="{}", metavar="JSON", help="the program's arguments")
@@ -61,38 +64,73 @@ def run(args: argparse.Namespace) -> int:
     return asyncio.run(demo(args, world, robots, program_args))
 
 
-async def demo(args: argparse.Namespace, world: Path, robots: list[str],
-               program_args: dict[str, Any]) -> int:
+async def demo(
+    args: argparse.Namespace, world: Path, robots: list[str], program_args: dict[str, Any]
+) -> int:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)  # noqa: ASYNC240 (once, before anything starts)
     recording, png = out / "run.jsonl", out / "trajectories.png"
     team = Team.generate("demo")
     port = free_port()
-    env = {**os.environ, **team.env(),
-           **NodeConfig(connect=(f"tcp/127.0.0.1:{port}",)).env(), "PYTHONPATH": str(ROOT),
-           "MOVER_LOG_LEVEL": os.environ.get("MOVER_LOG_LEVEL", "WARNING")}
+    env = {
+        **os.environ,
+        **team.env(),
+        **NodeConfig(connect=(f"tcp/127.0.0.1:{port}",)).env(),
+        "PYTHONPATH": str(ROOT),
+        "MOVER_LOG_LEVEL": os.environ.get("MOVER_LOG_LEVEL", "WARNING"),
+    }
     wall0 = time.monotonic()
-    print(f"mover demo: {args.program} with {', '.join(robots)} in {world.name} "
-          f"(team key is fresh; zenoh on 127.0.0.1:{port}; seed {args.seed})", flush=True)
+    print(
+        f"mover demo: {args.program} with {', '.join(robots)} in {world.name} "
+        f"(team key is fresh; zenoh on 127.0.0.1:{port}; seed {args.seed})",
+        flush=True,
+    )
     procs: list[asyncio.subprocess.Process] = []
     try:
-        async with Node("demo", team, kind="tool", observer=True,
-                        config=NodeConfig(listen=(f"tcp/127.0.0.1:{port}",))) as node:
+        async with Node(
+            "demo",
+            team,
+            kind="tool",
+            observer=True,
+            config=NodeConfig(listen=(f"tcp/127.0.0.1:{port}",)),
+        ) as node:
             states = node.subscribe(STATE_TOPIC)
             progress = node.subscribe(f"{PROGRESS_TOPIC}/demo")
-            procs.append(await _spawn(
-                [sys.executable, "-m", "mover._cli", "world", str(world), "--lockstep",
-                 "--expect", str(len(robots)), "--seed", str(args.seed), "--timeout", "5",
-                 "--record", str(recording), "--state-rate", "5"], env))
+            procs.append(
+                await _spawn(
+                    [
+                        sys.executable,
+                        "-m",
+                        "mover._cli",
+                        "world",
+                        str(world),
+                        "--lockstep",
+                        "--expect",
+                        str(len(robots)),
+                        "--seed",
+                        str(args.seed),
+                        "--timeout",
+                        "5",
+                        "--record",
+                        str(recording),
+                        "--state-rate",
+                        "5",
+                    ],
+                    env,
+                )
+            )
             for name in robots:
                 procs.append(await _spawn([sys.executable, "-m", "robots", "--name", name], env))
             await node.team.wait_for(["world", *robots], timeout=60)
-            print(f"[{time.monotonic() - wall0:5.1f}s] world and {len(robots)} robot processes "
-                  "up", flush=True)
+            print(
+                f"[{time.monotonic() - wall0:5.1f}s] world and {len(robots)} robot processes up",
+                flush=True,
+            )
             watcher = asyncio.create_task(_watch(progress, states, wall0))
             try:
                 outcomes = await asyncio.wait_for(
-                    launch(node, args.program, robots, program_args, run="demo"), args.timeout)
+                    launch(node, args.program, robots, program_args, run="demo"), args.timeout
+                )
             finally:
                 await asyncio.sleep(0.2)
                 watcher.cancel()
@@ -105,16 +143,25 @@ async def demo(args: argparse.Namespace, world: Path, robots: list[str],
     wall = time.monotonic() - wall0
     ok = _report(outcomes, phases, boxes, wall)
     replay = await asyncio.create_subprocess_exec(
-        sys.executable, "-m", "mover._cli", "replay", str(recording), "--out", str(png), env=env,
-        stdout=asyncio.subprocess.DEVNULL)
+        sys.executable,
+        "-m",
+        "mover._cli",
+        "replay",
+        str(recording),
+        "--out",
+        str(png),
+        env=env,
+        stdout=asyncio.subprocess.DEVNULL,
+    )
     if await replay.wait() == 0:
         print(f"trajectories: {png}")
     return 0 if ok else 1
 
 
 async def _spawn(cmd: list[str], env: dict[str, str]) -> asyncio.subprocess.Process:
-    return await asyncio.create_subprocess_exec(*cmd, env=env, stdin=asyncio.subprocess.PIPE,
-                                                stdout=asyncio.subprocess.DEVNULL)
+    return await asyncio.create_subprocess_exec(
+        *cmd, env=env, stdin=asyncio.subprocess.PIPE, stdout=asyncio.subprocess.DEVNULL
+    )
 
 
 async def _stop(procs: list[asyncio.subprocess.Process]) -> None:
@@ -152,8 +199,9 @@ async def _watch(progress: Any, states: Any, wall0: float) -> None:
             now = time.monotonic() - wall0
             phases.setdefault(phase, [now, sim[0]])
             extra = " ".join(f"{k}={_fmt(v)}" for k, v in data.items())
-            print(f"[{now:5.1f}s | sim {sim[0]:6.1f}s] {member}: {phase} {extra}".rstrip(),
-                  flush=True)
+            print(
+                f"[{now:5.1f}s | sim {sim[0]:6.1f}s] {member}: {phase} {extra}".rstrip(), flush=True
+            )
     finally:
         tracker.cancel()
 
@@ -172,8 +220,12 @@ def _fmt(v: Any) -> str:
     return str(v)
 
 
-def _report(outcomes: dict[str, dict[str, Any]], phases: dict[str, list[float]],
-            boxes: dict[str, list[list[float]]], wall: float) -> bool:
+def _report(
+    outcomes: dict[str, dict[str, Any]],
+    phases: dict[str, list[float]],
+    boxes: dict[str, list[list[float]]],
+    wall: float,
+) -> bool:
     print("\n== report ==")
     ok = True
     for member, outcome in outcomes.items():

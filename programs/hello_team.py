@@ -21,8 +21,9 @@ async def hello_team(robot: Robot, team: RunTeam, range: float = 3.0) -> dict[st
     await team.distributed_and(lambda: asyncio.sleep(0.3))  # everyone is listening now
     await robot.node.broadcast("hello", robot.id, range=range, reliable=True)
     await asyncio.sleep(0.5)
-    heard = {m.sender: [round(m.distance or 0.0, 2), round(m.bearing or 0.0, 2)]
-             for m in hellos.drain()}
+    heard = {
+        m.sender: [round(m.distance or 0.0, 2), round(m.bearing or 0.0, 2)] for m in hellos.drain()
+    }
     hellos.close()
     await team.report("heard", who=sorted(heard))
     nearest = min(heard, key=lambda n: heard[n][0], default=None)

@@ -21,14 +21,24 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--name", required=True, help="the robot's name in the team")
     p.add_argument("--team", help="team name (default $MOVER_TEAM); key from $MOVER_TEAM_KEY")
     p.add_argument("--kind", help="the robot's kind (default: from --team-file, else 'robot')")
-    p.add_argument("--hardware", default="sim",
-                   help="hardware backend: sim (world process over zenoh), none (workstation)")
+    p.add_argument(
+        "--hardware",
+        default="sim",
+        help="hardware backend: sim (world process over zenoh), none (workstation)",
+    )
     p.add_argument("--world", default="world", help="name of the world process (sim backend)")
     p.add_argument("--spec", metavar="JSON", help="the robot's body and devices, as JSON")
-    p.add_argument("--team-file", metavar="TOML",
-                   help="a team file: [[robots]] entries with name, kind and spec")
-    p.add_argument("--connect", action="append", metavar="ENDPOINT",
-                   help="zenoh endpoint of a team member or router; repeatable")
+    p.add_argument(
+        "--team-file",
+        metavar="TOML",
+        help="a team file: [[robots]] entries with name, kind and spec",
+    )
+    p.add_argument(
+        "--connect",
+        action="append",
+        metavar="ENDPOINT",
+        help="zenoh endpoint of a team member or router; repeatable",
+    )
 
 
 def register_robot(sub: Any) -> None:
@@ -72,15 +82,27 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     if args.connect:
-        config = NodeConfig(mode=config.mode, listen=config.listen,
-                            connect=config.connect + tuple(args.connect),
-                            overrides=config.overrides)
+        config = NodeConfig(
+            mode=config.mode,
+            listen=config.listen,
+            connect=config.connect + tuple(args.connect),
+            overrides=config.overrides,
+        )
     kind = args.kind or entry.get("kind", "robot")
     options = {"world": args.world} if args.hardware == "sim" else {}
     try:
-        asyncio.run(run_robot(args.name, team=team, config=config, kind=kind,
-                              hardware=args.hardware, spec=spec, options=options,
-                              ready=lambda: print("READY", flush=True)))
+        asyncio.run(
+            run_robot(
+                args.name,
+                team=team,
+                config=config,
+                kind=kind,
+                hardware=args.hardware,
+                spec=spec,
+                options=options,
+                ready=lambda: print("READY", flush=True),
+            )
+        )
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     return 0

@@ -61,8 +61,9 @@ def _procedures(robot: Robot) -> dict[str, Callable[..., Any]]:
             "pose": list(hw.odometry.pose()),
             "sonar": list(hw.sonar.ranges()) if hw.sonar else None,
             "bumper": hw.bumper.side() if hw.bumper else None,
-            "camera": [[s.kind, s.id, s.status, s.range, s.bearing]
-                       for s in hw.camera.sightings()] if hw.camera else None,
+            "camera": [[s.kind, s.id, s.status, s.range, s.bearing] for s in hw.camera.sightings()]
+            if hw.camera
+            else None,
         }
 
     return {"robot.pose": pose, "robot.stop": stop, "robot.sense": sense}
@@ -94,8 +95,10 @@ async def run_robot(
             await asyncio.Event().wait()
         backends = hardware_backends()
         if hardware not in backends:
-            raise ValueError(f"no hardware backend {hardware!r} (installed: "
-                             f"{', '.join(sorted(backends)) or 'none'})")
+            raise ValueError(
+                f"no hardware backend {hardware!r} (installed: "
+                f"{', '.join(sorted(backends)) or 'none'})"
+            )
         hw: Hardware = await backends[hardware].load()(node, name, spec or {}, **(options or {}))
         if hw.radio is not None:
             node.radio.locator = hw.radio  # ground truth, for the range-limited broadcast only

@@ -13,8 +13,15 @@ from tests.helpers.procs import ROOT, cluster
 
 async def mover(*args: str, env: dict[str, str]) -> tuple[int, str, str]:
     proc = await asyncio.create_subprocess_exec(
-        sys.executable, "-m", "mover._cli", *args, env={**os.environ, **env}, cwd=ROOT,
-        stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.PIPE)
+        sys.executable,
+        "-m",
+        "mover._cli",
+        *args,
+        env={**os.environ, **env},
+        cwd=ROOT,
+        stdout=asyncio.subprocess.PIPE,
+        stderr=asyncio.subprocess.PIPE,
+    )
     out, err = await asyncio.wait_for(proc.communicate(), 60)
     return proc.returncode or 0, out.decode(), err.decode()
 
@@ -30,7 +37,8 @@ async def test_ps_and_call() -> None:
         assert rows["r1"]["kind"] == "foot-bot" and rows["tester"]["kind"] == "test"
         assert not any(n.startswith("ps-") for n in rows)  # the tool is not a member
 
-        assert await mover("call", "r1", "add", "2", "40", env=env) == (0, "42\n", "")
+        code, out, err = await mover("call", "r1", "add", "2", "40", env=env)
+        assert (code, out) == (0, "42\n"), err
         code, _, err = await mover("call", "r1", "boom", '"no"', env=env)
         assert code == 1 and "RemoteError" in err and "ValueError: no" in err
         code, _, err = await mover("call", "r1", "add", "1", env=env)

@@ -14,8 +14,9 @@ from tests.helpers.procs import cluster
 
 
 async def start_team(c, node: Node, names: list[str], config: NodeConfig | None = None) -> None:
-    await asyncio.gather(*(c.start("tests.helpers.team_proc", "--name", n, config=config)
-                           for n in names))
+    await asyncio.gather(
+        *(c.start("tests.helpers.team_proc", "--name", n, config=config) for n in names)
+    )
     await node.team.wait_for(names, timeout=30)
 
 
@@ -24,8 +25,9 @@ async def test_ties_always_agree_on_one_winner_10_processes_100_rounds() -> None
     async with cluster() as c, Node("launcher", c.team, kind="tool", config=c.seed) as node:
         await start_team(c, node, names)
         start = time.time() + 1.0
-        outcomes = await launch(node, "ties", names,
-                                {"rounds": 100, "start": start, "gap": 0.03}, run="ties")
+        outcomes = await launch(
+            node, "ties", names, {"rounds": 100, "start": start, "gap": 0.03}, run="ties"
+        )
         winners = [o["result"] for o in outcomes.values()]
         assert all(w == winners[0] for w in winners), "members disagreed"
         assert len(winners[0]) == 100
@@ -36,8 +38,9 @@ async def test_losers_clean_up(tmp_path: Path) -> None:
     names = ["a", "b", "c", "d"]
     async with cluster() as c, Node("launcher", c.team, kind="tool", config=c.seed) as node:
         await start_team(c, node, names)
-        outcomes = await launch(node, "cleanup", names,
-                                {"winner": "c", "marker_dir": str(tmp_path)}, run="clean")
+        outcomes = await launch(
+            node, "cleanup", names, {"winner": "c", "marker_dir": str(tmp_path)}, run="clean"
+        )
         assert {o["result"] for o in outcomes.values()} == {"c:the box"}
         for loser in ("a", "b", "d"):
             assert (tmp_path / loser).read_text() == "cleaned"
@@ -70,8 +73,14 @@ async def test_link_cut_and_restored_during_a_step_completes_with_the_right_resu
 
     async def router() -> asyncio.subprocess.Process:
         proc = await asyncio.create_subprocess_exec(
-            sys.executable, "-m", "mover._cli", "router", "--listen",
-            f"tcp/127.0.0.1:{router_port}", stdout=asyncio.subprocess.PIPE)
+            sys.executable,
+            "-m",
+            "mover._cli",
+            "router",
+            "--listen",
+            f"tcp/127.0.0.1:{router_port}",
+            stdout=asyncio.subprocess.PIPE,
+        )
         assert proc.stdout is not None
         await asyncio.wait_for(proc.stdout.readline(), 20)
         return proc
@@ -81,7 +90,8 @@ async def test_link_cut_and_restored_during_a_step_completes_with_the_right_resu
         async with cluster() as c, Node("launcher", c.team, kind="tool", config=client) as node:
             await start_team(c, node, names, config=client)
             done = asyncio.ensure_future(
-                launch(node, "and_outage", names, {"hold": 1.0}, run="cut"))
+                launch(node, "and_outage", names, {"hold": 1.0}, run="cut")
+            )
             await asyncio.sleep(0.4)
             r.kill()  # the network is gone while every operation is still running
             await r.wait()
@@ -89,8 +99,7 @@ async def test_link_cut_and_restored_during_a_step_completes_with_the_right_resu
             r = await router()  # and back
             outcomes = await asyncio.wait_for(done, 30)
             expected = {"a": "A", "b": "B", "c": "C"}
-            assert {n: o.get("result") for n, o in outcomes.items()} == {n: expected
-                                                                          for n in names}
+            assert {n: o.get("result") for n, o in outcomes.items()} == {n: expected for n in names}
     finally:
         r.kill()
         await r.wait()
@@ -102,7 +111,14 @@ async def test_an_outsider_cannot_start_a_program() -> None:
         async with Node("intruder", Team.generate("alpha"), config=c.peer) as outsider:
             await asyncio.sleep(0.5)
             with pytest.raises((Refused, UnknownRobot)):
-                await outsider.call("a", "mover.start", "ties", "evil", ["a"],
-                                    {"rounds": 1, "start": 0.0, "gap": 0.0}, timeout=5)
+                await outsider.call(
+                    "a",
+                    "mover.start",
+                    "ties",
+                    "evil",
+                    ["a"],
+                    {"rounds": 1, "start": 0.0, "gap": 0.0},
+                    timeout=5,
+                )
         with pytest.raises(Exception, match="no run 'evil'"):
             await node.call("a", "mover.outcome", "evil", timeout=5)

@@ -15,8 +15,10 @@ from mover import MemberEvent, MoverError, Node, NodeClosed, NodeConfig, Team, f
 
 def configs() -> tuple[NodeConfig, NodeConfig]:
     port = free_port()
-    return (NodeConfig(listen=(f"tcp/127.0.0.1:{port}",)),
-            NodeConfig(connect=(f"tcp/127.0.0.1:{port}",)))
+    return (
+        NodeConfig(listen=(f"tcp/127.0.0.1:{port}",)),
+        NodeConfig(connect=(f"tcp/127.0.0.1:{port}",)),
+    )
 
 
 async def test_clean_shutdown_leaves_no_threads() -> None:

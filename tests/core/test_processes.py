@@ -45,12 +45,18 @@ POSITIONS = {"r1": (0.0, 0.0, 0.0), "r2": (3.0, 4.0, math.pi / 2), "r3": (6.0, 8
 
 @pytest_asyncio.fixture(scope="module", loop_scope="module")
 async def world() -> AsyncIterator[tuple[Cluster, Node]]:
-    async with cluster() as c, Node("tester", c.team, kind="test", config=c.seed,
-                    locator=FixedLocator(100.0, 100.0)) as node:
-        await asyncio.gather(*(
-            c.robot(name, "--x", str(x), "--y", str(y), "--heading", str(h))
-            for name, (x, y, h) in POSITIONS.items()
-        ))
+    async with (
+        cluster() as c,
+        Node(
+            "tester", c.team, kind="test", config=c.seed, locator=FixedLocator(100.0, 100.0)
+        ) as node,
+    ):
+        await asyncio.gather(
+            *(
+                c.robot(name, "--x", str(x), "--y", str(y), "--heading", str(h))
+                for name, (x, y, h) in POSITIONS.items()
+            )
+        )
         await node.team.wait_for(POSITIONS, timeout=10)
         yield c, node
 
@@ -208,8 +214,9 @@ async def test_sigkilled_member_is_seen_gone_and_its_call_fails(
     failed = time.monotonic() - killed
     await node.team.wait_gone("victim", timeout=1.0)
     gone = time.monotonic() - killed
-    print(f"SIGKILL: call failed after {failed * 1000:.1f} ms, member gone after "
-          f"{gone * 1000:.1f} ms")
+    print(
+        f"SIGKILL: call failed after {failed * 1000:.1f} ms, member gone after {gone * 1000:.1f} ms"
+    )
     assert failed < 1.0
     assert gone < 1.0  # typically a few ms (the kernel closes the socket)
 

@@ -20,8 +20,14 @@ async def test_members_talk_through_a_secured_router_and_outsiders_cannot_connec
     port = free_port()
     generate_config(tmp_path, "alpha", ["a", "b"], "127.0.0.1", port)
     router = await asyncio.create_subprocess_exec(
-        sys.executable, "-m", "mover._cli", "router", "--config", str(tmp_path / "router.json"),
-        stdout=asyncio.subprocess.PIPE)
+        sys.executable,
+        "-m",
+        "mover._cli",
+        "router",
+        "--config",
+        str(tmp_path / "router.json"),
+        stdout=asyncio.subprocess.PIPE,
+    )
     try:
         assert router.stdout is not None
         line = await asyncio.wait_for(router.stdout.readline(), 20)
@@ -29,11 +35,16 @@ async def test_members_talk_through_a_secured_router_and_outsiders_cannot_connec
         team = Team.generate("alpha")
 
         def member(name: str) -> NodeConfig:
-            return NodeConfig(mode="client", listen=(),
-                              overrides=_read_overrides(str(tmp_path / f"member-{name}.json")))
+            return NodeConfig(
+                mode="client",
+                listen=(),
+                overrides=_read_overrides(str(tmp_path / f"member-{name}.json")),
+            )
 
-        async with Node("a", team, config=member("a")) as a, \
-                Node("b", team, config=member("b")) as b:
+        async with (
+            Node("a", team, config=member("a")) as a,
+            Node("b", team, config=member("b")) as b,
+        ):
             b.export(lambda x: 2 * x, "double")
             await a.team.wait_for({"a", "b"}, timeout=10)
             assert await a.call("b", "double", 21, timeout=5) == 42

@@ -17,11 +17,17 @@ async def nodes() -> AsyncIterator[list[Node]]:
     team = Team.generate("alpha")
     port = free_port()
     async with AsyncExitStack() as stack:
-        out = [await stack.enter_async_context(
-            Node("n0", team, config=NodeConfig(listen=(f"tcp/127.0.0.1:{port}",))))]
+        out = [
+            await stack.enter_async_context(
+                Node("n0", team, config=NodeConfig(listen=(f"tcp/127.0.0.1:{port}",)))
+            )
+        ]
         for i in range(1, 5):
-            out.append(await stack.enter_async_context(
-                Node(f"n{i}", team, config=NodeConfig(connect=(f"tcp/127.0.0.1:{port}",)))))
+            out.append(
+                await stack.enter_async_context(
+                    Node(f"n{i}", team, config=NodeConfig(connect=(f"tcp/127.0.0.1:{port}",)))
+                )
+            )
         for n in out:
             await n.team.wait_for({f"n{i}" for i in range(5)}, timeout=10)
         yield out
@@ -42,6 +48,7 @@ async def test_or_first_finisher_wins_and_losers_clean_up(nodes: list[Node]) -> 
                 return f"found by {name}"
             finally:
                 cleaned.append(name)
+
         return run
 
     ts = teams(nodes)
@@ -56,8 +63,10 @@ async def test_or_first_finisher_wins_and_losers_clean_up(nodes: list[Node]) -> 
 async def test_or_ties_agree(nodes: list[Node]) -> None:
     ts = teams(nodes)
     for _ in range(20):
+
         async def now(t: TaskTeam) -> str:
             return t.me
+
         outs = await asyncio.gather(*(t.distributed_or(lambda t=t: now(t)) for t in ts))
         assert len({o.winner for o in outs}) == 1
 
@@ -65,12 +74,14 @@ async def test_or_ties_agree(nodes: list[Node]) -> None:
 async def test_and_gives_everyone_all_results_both_variants(nodes: list[Node]) -> None:
     ts = teams(nodes)
     for designated in (True, False):
+
         async def op(t: TaskTeam) -> int:
             await asyncio.sleep(0.01 * int(t.me[1:]))
             return int(t.me[1:]) ** 2
 
-        outs = await asyncio.gather(*(t.distributed_and(lambda t=t: op(t), designated=designated)
-                                      for t in ts))
+        outs = await asyncio.gather(
+            *(t.distributed_and(lambda t=t: op(t), designated=designated) for t in ts)
+        )
         assert all(o == {f"n{i}": i * i for i in range(5)} for o in outs)
     n = len(nodes)
     designated_msgs = sum(t.metrics[0].messages for t in ts)
@@ -87,8 +98,9 @@ async def test_and_reports_failed_operations(nodes: list[Node]) -> None:
             raise RuntimeError("stuck")
         return "ok"
 
-    outs = await asyncio.gather(*(t.distributed_and(lambda t=t: op(t)) for t in ts),
-                                return_exceptions=True)
+    outs = await asyncio.gather(
+        *(t.distributed_and(lambda t=t: op(t)) for t in ts), return_exceptions=True
+    )
     assert isinstance(outs[3], RuntimeError)
     assert outs[0]["n3"] == OperationFailed("RuntimeError", "stuck")  # type: ignore[index]
 

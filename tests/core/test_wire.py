@@ -16,7 +16,15 @@ KEY = b"k" * 32
 @pytest.mark.parametrize(
     "value",
     [
-        None, True, 3, -2**40, 1.5, "txt", b"\x00bytes", [1, [2, 3]], {"a": {1: "int key"}},
+        None,
+        True,
+        3,
+        -(2**40),
+        1.5,
+        "txt",
+        b"\x00bytes",
+        [1, [2, 3]],
+        {"a": {1: "int key"}},
     ],
 )
 def test_plain_values_round_trip(value: object) -> None:

@@ -49,8 +49,14 @@ class Cluster:
         env.update((config or self.peer).env())
         env["PYTHONPATH"] = str(ROOT)
         proc = await asyncio.create_subprocess_exec(
-            sys.executable, "-m", module, *args,
-            stdin=asyncio.subprocess.PIPE, stdout=asyncio.subprocess.PIPE, env=env, cwd=ROOT,
+            sys.executable,
+            "-m",
+            module,
+            *args,
+            stdin=asyncio.subprocess.PIPE,
+            stdout=asyncio.subprocess.PIPE,
+            env=env,
+            cwd=ROOT,
         )
         self.procs.append(proc)
         if ready is None:

@@ -24,8 +24,14 @@ async def main(args: argparse.Namespace) -> None:
     state = {"bumps": 0}
     heard: dict[str, list[list[Any]]] = {t: [] for t in TOPICS}
     locator = FixedLocator(args.x, args.y, args.heading)
-    async with Node(args.name, team, kind=args.kind, config=NodeConfig.from_env(),
-                    locator=locator, max_size=args.max_size) as node:
+    async with Node(
+        args.name,
+        team,
+        kind=args.kind,
+        config=NodeConfig.from_env(),
+        locator=locator,
+        max_size=args.max_size,
+    ) as node:
 
         async def add(x: int, y: int) -> int:
             return x + y

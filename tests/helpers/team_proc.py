@@ -19,6 +19,7 @@ async def ties(robot: None, team: RunTeam, rounds: int, start: float, gap: float
     """OR rounds in which every member finishes at the same instant."""
     winners = []
     for k in range(rounds):
+
         async def op(k: int = k) -> str:
             await asyncio.sleep(max(0.0, start + k * gap - time.time()))
             return team.me
@@ -49,6 +50,7 @@ async def cleanup(robot: None, team: RunTeam, winner: str, marker_dir: str) -> s
 
 async def and_wait(robot: None, team: RunTeam, slow: str) -> str:
     """AND in which ``slow`` never finishes (the test kills it)."""
+
     async def op() -> str:
         await asyncio.sleep(3600 if team.me == slow else 0.0)
         return team.me
@@ -62,6 +64,7 @@ async def and_wait(robot: None, team: RunTeam, slow: str) -> str:
 
 async def and_outage(robot: None, team: RunTeam, hold: float) -> dict[str, str]:
     """AND whose operations end while the network is down."""
+
     async def op() -> str:
         await asyncio.sleep(hold)
         return team.me.upper()

@@ -12,9 +12,18 @@ from tests.helpers.procs import ROOT
 
 async def run_demo(tmp_path: Path, *args: str) -> tuple[int, str]:
     proc = await asyncio.create_subprocess_exec(
-        sys.executable, "-m", "mover._cli", "demo", "--out", str(tmp_path), *args, cwd=ROOT,
+        sys.executable,
+        "-m",
+        "mover._cli",
+        "demo",
+        "--out",
+        str(tmp_path),
+        *args,
+        cwd=ROOT,
         env={**os.environ, "PYTHONPATH": str(ROOT)},
-        stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.STDOUT)
+        stdout=asyncio.subprocess.PIPE,
+        stderr=asyncio.subprocess.STDOUT,
+    )
     out, _ = await asyncio.wait_for(proc.communicate(), 120)
     return proc.returncode or 0, out.decode()
 
