@@ -327,16 +327,11 @@ class Node:
         entry = self._subs.get(topic)
         if env.sender == self.name or entry is None:
             return
-        receive, subs = self.radio.receive, entry[1]
-        delivered = 0
-        for item in items:
-            if not (isinstance(item, list) and len(item) == 3):
-                continue
-            message = receive(env.sender, topic, item[0], item[1], item[2], env.timestamp)
-            if message is not None:
-                delivered += 1
-                for sub in subs:
-                    sub._put(message)
+        messages = self.radio.receive_all(env.sender, topic, items, env.timestamp)
+        if messages:
+            for sub in entry[1]:
+                sub._put(messages)
+        delivered = len(messages)
         self.stats["recv.bc"] += delivered
 
     def neighbours(self, max_age: float = 1.0) -> dict[str, Neighbour]:

@@ -84,10 +84,11 @@ class Subscription:
         self._on_close = on_close
         self.dropped = 0  # messages lost because the reader fell ``maxlen`` behind
 
-    def _put(self, message: Message) -> None:
-        if len(self._items) == self._items.maxlen:
-            self.dropped += 1
-        self._items.append(message)
+    def _put(self, messages: list[Message]) -> None:
+        room = (self._items.maxlen or 0) - len(self._items)
+        if len(messages) > room:
+            self.dropped += len(messages) - room
+        self._items.extend(messages)
         waiter = self._waiter
         if waiter is not None and not waiter.done():
             waiter.set_result(None)
@@ -162,26 +163,46 @@ class Radio:
         self, sender: str, topic: str, data: Any, where: Any, reach: Any, sent: float
     ) -> Message | None:
         """The message as this receiver gets it, or None if it does not reach us."""
+        got = self.receive_all(sender, topic, [[data, where, reach]], sent)
+        return got[0] if got else None
+
+    def receive_all(self, sender: str, topic: str, items: list[Any], sent: float) -> list[Message]:
+        """The messages of one frame (``[data, where, range]`` items) that reach us."""
         me = self.position()
+        model = self.model
+        out: list[Message] = []
+        last_where: Any = None
         distance = bearing = None
-        if me is not None and isinstance(where, list) and len(where) >= 2:
-            dx, dy = float(where[0]) - me[0], float(where[1]) - me[1]
-            distance = math.hypot(dx, dy)
-            bearing = _wrap(math.atan2(dy, dx) - me[2])
-        if reach is not None:
-            if distance is None or distance > float(reach):
-                self.out_of_range += 1
-                return None
-            model = self.model
-            if model.drop and self._rng.random() < model.drop:
-                self.lost += 1
-                return None
-            if model.range_noise:
-                distance = max(0.0, distance + self._rng.gauss(0.0, model.range_noise))
-            if model.bearing_noise and bearing is not None:
-                bearing = _wrap(bearing + self._rng.gauss(0.0, model.bearing_noise))
-        self._neighbours[sender] = Neighbour(sender, distance, bearing, time.monotonic())
-        return Message(sender, topic, data, distance, bearing, sent)
+        for item in items:
+            if not (isinstance(item, list) and len(item) == 3):
+                continue
+            data, where, reach = item
+            if where != last_where:  # a burst from one place: compute once
+                last_where = where
+                distance = bearing = None
+                if me is not None and isinstance(where, list) and len(where) >= 2:
+                    dx, dy = float(where[0]) - me[0], float(where[1]) - me[1]
+                    distance = math.hypot(dx, dy)
+                    bearing = _wrap(math.atan2(dy, dx) - me[2])
+            d, b = distance, bearing
+            if reach is not None:
+                if d is None or d > float(reach):
+                    self.out_of_range += 1
+                    continue
+                if model.drop and self._rng.random() < model.drop:
+                    self.lost += 1
+                    continue
+                if model.range_noise:
+                    d = max(0.0, d + self._rng.gauss(0.0, model.range_noise))
+                if model.bearing_noise and b is not None:
+                    b = _wrap(b + self._rng.gauss(0.0, model.bearing_noise))
+            out.append(Message(sender, topic, data, d, b, sent))
+        if out:
+            last = out[-1]
+            self._neighbours[sender] = Neighbour(
+                sender, last.distance, last.bearing, time.monotonic()
+            )
+        return out
 
     def neighbours(self, max_age: float = 1.0) -> dict[str, Neighbour]:
         """Members heard within the last ``max_age`` seconds."""
