@@ -240,13 +240,15 @@ class RpcClient:
         call_id = self._next_id
         frame = node._sealer.seal("call", [procedure, list(args), kwargs], call_id)
         future: asyncio.Future[Any] = asyncio.get_running_loop().create_future()
-        self.pending[call_id] = _Pending(robot, procedure, future, robot in node.team)
+        member = robot in node.team
+        self.pending[call_id] = _Pending(robot, procedure, future, member)
+        # For a member, liveliness tells when it is lost; only a call to a stranger needs to
+        # hear that the query ended unanswered (no such robot), which costs a loop wake-up.
+        on_done = None if member else partial(self._on_done, call_id)
         try:
             node._session.get(
                 _keys.rpc(node.team_name, robot),
-                node._portal.callback(
-                    partial(self._on_reply, call_id), partial(self._on_done, call_id)
-                ),
+                node._portal.callback(partial(self._on_reply, call_id), on_done),
                 payload=frame,
                 consolidation=zenoh.ConsolidationMode.NONE,
                 timeout=(timeout + 1.0) if timeout is not None else _NO_TIMEOUT,
@@ -291,6 +293,8 @@ class RpcClient:
         reason = read_refusal(frame)
         if reason is not None:
             p.refusal = reason
+            if p.was_member:  # no end-of-query notice will come: tell the caller now
+                self._on_done(call_id, None)
             return
         node = self.node
         try:
