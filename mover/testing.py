@@ -1,0 +1,138 @@
+"""Multi-process integration tests of team programs: real processes, real zenoh on 127.0.0.1.
+
+::
+
+    from mover.testing import cluster
+
+    async def test_my_program():
+        async with cluster() as c, c.launcher() as node:
+            await c.world("worlds/search_rescue.toml", expect=2)
+            await c.robots("ernst", "moseley")
+            outcomes = await launch(node, "my_program", ["ernst", "moseley"], {}, run="t1")
+
+Every process gets a fresh team key and connects to a seed port chosen at run time (multicast
+scouting off); everything started is killed on exit.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import os
+import signal
+import sys
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ._config import NodeConfig, Team, free_port
+from ._node import Node
+
+
+@dataclass
+class Cluster:
+    """A seed endpoint that every process connects to, and the processes started."""
+
+    team: Team
+    port: int = field(default_factory=free_port)
+    procs: list[asyncio.subprocess.Process] = field(default_factory=list)
+    cwd: Path = field(default_factory=Path.cwd)
+    env: dict[str, str] = field(default_factory=dict)
+
+    @property
+    def seed(self) -> NodeConfig:
+        """Settings for the node that listens on the seed port (the test's own node)."""
+        return NodeConfig(listen=(f"tcp/127.0.0.1:{self.port}",))
+
+    @property
+    def peer(self) -> NodeConfig:
+        """Settings for every other node: a free port of its own, connecting to the seed."""
+        return NodeConfig(connect=(f"tcp/127.0.0.1:{self.port}",))
+
+    @asynccontextmanager
+    async def launcher(self, name: str = "launcher") -> AsyncIterator[Node]:
+        """The test's own node (a team member of kind ``tool``, listening on the seed port)."""
+        async with Node(name, self.team, kind="tool", config=self.seed) as node:
+            yield node
+
+    async def start(
+        self,
+        module: str,
+        *args: str,
+        team: Team | None = None,
+        ready: str | None = "READY",
+        timeout: float = 30.0,
+        config: NodeConfig | None = None,
+    ) -> asyncio.subprocess.Process:
+        """Start ``python -m module args``; wait until it prints ``ready`` (None: no wait)."""
+        env = {**os.environ, **self.env, **(team or self.team).env(), **(config or self.peer).env()}
+        proc = await asyncio.create_subprocess_exec(
+            sys.executable,
+            "-m",
+            module,
+            *args,
+            stdin=asyncio.subprocess.PIPE,
+            stdout=asyncio.subprocess.PIPE,
+            env=env,
+            cwd=self.cwd,
+        )
+        self.procs.append(proc)
+        if ready is None:
+            return proc
+        assert proc.stdout is not None
+        async with asyncio.timeout(timeout):
+            while True:
+                line = (await proc.stdout.readline()).decode()
+                if not line:
+                    raise RuntimeError(f"{module} {' '.join(args)} exited before it was ready")
+                if line.startswith(ready):
+                    return proc
+
+    async def world(
+        self, worldfile: str, *args: str, expect: int = 0
+    ) -> asyncio.subprocess.Process:
+        """Start a lock-step world process (``mover world``) expecting ``expect`` robots."""
+        return await self.start(
+            "mover._cli",
+            "world",
+            worldfile,
+            "--lockstep",
+            "--expect",
+            str(expect),
+            *args,
+            ready=None,
+        )
+
+    async def robots(self, *names: str, hardware: str = "sim") -> list[asyncio.subprocess.Process]:
+        """Start robot processes (``python -m robots``) together and wait until all are up."""
+        return list(
+            await asyncio.gather(
+                *(self.start("robots", "--name", n, "--hardware", hardware) for n in names)
+            )
+        )
+
+    async def stop(self) -> None:
+        """Kill every process started (and wait for them)."""
+        for proc in self.procs:
+            if proc.returncode is None:
+                try:
+                    proc.send_signal(signal.SIGCONT)
+                    proc.kill()
+                except ProcessLookupError:
+                    pass
+        for proc in self.procs:
+            try:
+                async with asyncio.timeout(10):
+                    await proc.wait()
+            except TimeoutError:
+                pass
+
+
+@asynccontextmanager
+async def cluster(team: Team | None = None, **kwargs: object) -> AsyncIterator[Cluster]:
+    """A cluster whose processes are all killed on exit."""
+    c = Cluster(team or Team.generate("alpha"), **kwargs)  # type: ignore[arg-type]
+    try:
+        yield c
+    finally:
+        await c.stop()
