@@ -18,12 +18,13 @@ Conventions:
 
 from __future__ import annotations
 
+from contextlib import AbstractAsyncContextManager
 from dataclasses import dataclass
 from typing import Literal, Protocol, runtime_checkable
 
 __all__ = [
-    "BumperSide",
     "Bumper",
+    "BumperSide",
     "Camera",
     "Clock",
     "Drive",
@@ -208,6 +209,16 @@ class Clock(Protocol):
 
     async def sleep(self, dt: float) -> None:
         """Let ``dt`` seconds of hardware time pass (whole ticks, at least one)."""
+        ...
+
+    def ticking(self) -> AbstractAsyncContextManager[None]:
+        """Keep the hardware ticking, with the current commands, while the block awaits
+        something else (a message, a team step).
+
+        In lock-step simulation the world waits for every robot's command each tick, and drops
+        a robot that stays silent; a robot waiting on its team must keep ticking. On hardware
+        with its own clock this does nothing.
+        """
         ...
 
 

@@ -14,8 +14,12 @@ from dataclasses import dataclass
 
 import numpy as np
 import pymunk
+from pymunk._chipmunk import ffi as _ffi
+from pymunk._chipmunk import lib as _lib
 
 from ._bodies import CAT_BOX, CAT_IMMOVABLE, CAT_MARKER, CAT_QUERY, CAT_ROBOT, CAT_WALL, SOLID
+
+_INFO = _ffi.new("cpSegmentQueryInfo *")
 
 
 def wrap(angle: float) -> float:
@@ -40,7 +44,7 @@ class Entity:
 
 def sonar_ranges(
     space: pymunk.Space,
-    body: pymunk.Body,
+    pose: tuple[float, float, float],
     radius: float,
     group: int,
     angles: tuple[float, ...],
@@ -48,20 +52,25 @@ def sonar_ranges(
     noise: float,
     rng: np.random.Generator,
 ) -> list[float]:
-    """Range from the rim along each ray to the first solid shape, ``max_range`` if none."""
-    x, y = body.position
-    heading = body.angle
-    query = pymunk.ShapeFilter(group=group, categories=CAT_QUERY, mask=SOLID)
+    """Range from the rim along each ray to the first solid shape, ``max_range`` if none.
+
+    Calls chipmunk's segment query directly (PYMUNK-NOTES.md: ~1 µs a ray instead of ~4 µs
+    through ``Space.segment_query_first``, which builds Python objects for every hit).
+    """
+    x, y, heading = pose
+    query = (group, CAT_QUERY, SOLID)
     out = []
+    info = _INFO
+    null = _ffi.NULL
+    cspace = space._space
     for a in angles:
         c, s = math.cos(heading + a), math.sin(heading + a)
         start = (x + c * radius, y + s * radius)
         end = (x + c * (radius + max_range), y + s * (radius + max_range))
-        hit = space.segment_query_first(start, end, 0.0, query)
-        if hit is None:
+        if _lib.cpSpaceSegmentQueryFirst(cspace, start, end, 0.0, query, info) == null:
             out.append(max_range)
             continue
-        r = hit.alpha * max_range
+        r = info.alpha * max_range
         if noise > 0.0:
             r = min(max(r + float(rng.normal(0.0, noise)), 0.0), max_range)
         out.append(r)
@@ -70,23 +79,24 @@ def sonar_ranges(
 
 def bumper_side(body: pymunk.Body) -> str | None:
     """Which side of the ring touches something: ``front`` (±45°), ``left``, ``right``,
-    ``back``; the deepest contact wins."""
-    best: list = [None, 0.0]
+    ``back``. With several contacts, the one nearest the heading wins.
+
+    The robot is a disc, so each contact lies along the contact normal from its centre: the
+    normal alone gives the bearing (far cheaper than reading the contact points).
+    """
+    bearings: list[float] = []
     heading = body.angle
-    pos = body.position
+    get_normal = _lib.cpArbiterGetNormal
 
     def visit(arb: pymunk.Arbiter) -> None:
-        for p in arb.contact_point_set.points:
-            depth = -p.distance
-            if best[0] is None or depth > best[1]:
-                point = p.point_a if arb.bodies[0] is body else p.point_b
-                best[0] = wrap(math.atan2(point.y - pos.y, point.x - pos.x) - heading)
-                best[1] = depth
+        n = get_normal(arb._arbiter)
+        sign = 1.0 if arb.bodies[0] is body else -1.0
+        bearings.append(wrap(math.atan2(sign * n.y, sign * n.x) - heading))
 
     body.each_arbiter(visit)
-    bearing = best[0]
-    if bearing is None:
+    if not bearings:
         return None
+    bearing = min(bearings, key=abs)
     if abs(bearing) <= math.pi / 4:
         return "front"
     if abs(bearing) >= 3 * math.pi / 4:
@@ -165,8 +175,8 @@ class Floor:
 
     def index(self, x: float, y: float) -> tuple[int, int]:
         """The (column, row) of the cell holding point (x, y), clamped into the grid."""
-        i = min(max(int(math.floor(x / self.cell)), 0), self.shape[0] - 1)
-        j = min(max(int(math.floor(y / self.cell)), 0), self.shape[1] - 1)
+        i = min(max(math.floor(x / self.cell), 0), self.shape[0] - 1)
+        j = min(max(math.floor(y / self.cell), 0), self.shape[1] - 1)
         return i, j
 
     def read(self, x: float, y: float) -> tuple[int, str]:

@@ -15,7 +15,10 @@ from sim_hw._walker import random_walk
 NOISY = {"sonar": {"noise": 0.02}, "odometry": {"trans_noise": 0.05, "drift": 0.02}}
 
 
-async def _run(seed: int, robots: int = 4, ticks: int = 150) -> list[list[list[float]]]:
+async def _run(
+    seed: int, order: tuple[int, ...] = (2, 0, 3, 1), ticks: int = 150
+) -> list[list[list[float]]]:
+    robots = len(order)
     spec = random_obstacles((6.0, 6.0), 6, np.random.default_rng(1))
     server = WorldServer(World(spec, seed=seed), expect=robots)
 
@@ -23,16 +26,15 @@ async def _run(seed: int, robots: int = 4, ticks: int = 150) -> list[list[list[f
         hw = await in_process(server, f"r{i}", NOISY)
         return await random_walk(hw, np.random.default_rng(100 + i), ticks)
 
-    # start the robots in a scrambled order: joins are admitted in id order anyway
-    order = [2, 0, 3, 1][:robots]
+    # robots join in the given order; the world re-creates them in id order at the start
     tracks = await asyncio.gather(*(robot(i) for i in order))
     await server.aclose()
     return [tracks[order.index(i)] for i in range(robots)]
 
 
 async def test_same_seed_same_trajectories() -> None:
-    first, second = await _run(seed=5), await _run(seed=5)
-    assert first == second  # bit for bit
+    first, second = await _run(seed=5), await _run(seed=5, order=(3, 1, 0, 2))
+    assert first == second  # bit for bit, whatever order the robots joined in
     assert first[0][0] != first[0][-1]  # they did move
 
 
@@ -48,6 +50,20 @@ async def test_a_silent_robot_is_dropped(caplog: pytest.LogCaptureFixture) -> No
     assert server.dropped == ["silent"]
     assert "robot silent sent no command for tick 0 within 0.2 s: dropped" in caplog.text
     assert set(server.world.robots) == {"live"}
+    await server.aclose()
+
+
+async def test_joins_return_at_once_and_the_clock_waits_for_all() -> None:
+    server = WorldServer(World(random_obstacles((6.0, 6.0), 0)), expect=2)
+    first = await in_process(server, "b")  # returns before "a" has joined
+    ticking = asyncio.ensure_future(first.clock.tick())
+    await asyncio.sleep(0.05)
+    assert not ticking.done()
+    assert server.world.tick == 0
+    second = await in_process(server, "a")
+    await asyncio.gather(ticking, second.clock.tick())
+    assert server.world.tick == 1
+    assert list(server.world.robots) == ["a", "b"]  # re-created in id order
     await server.aclose()
 
 

@@ -67,3 +67,19 @@ async def test_push_with_nothing_ahead_reports_nothing() -> None:
     assert result.object_id is None
     assert not result.moved
     await server.aclose()
+
+
+def test_pusher_and_steerer_turn_the_box_together() -> None:
+    # Brown & Jennings' pusher/steerer: robots at the two rear corners; the steerer (left
+    # corner) goes slower than the pusher, so the box turns towards the steerer's side.
+    world = World(WorldSpec(size=(12.0, 10.0), boxes=(BOX,)))
+    rim = BOX.center[0] - BOX.size[0] / 2 - 0.15 - 0.002
+    world.add_robot("pusher", RobotSpec(pose=(rim, BOX.center[1] - 0.2, 0.0)))
+    world.add_robot("steerer", RobotSpec(pose=(rim, BOX.center[1] + 0.2, 0.0)))
+    for _ in range(30):
+        world.set_command("pusher", {"v": 0.3, "w": 0.0})
+        world.set_command("steerer", {"v": 0.15, "w": 0.0})
+        world.step()
+    x, _, angle = world.box_pose("big")
+    assert x - BOX.center[0] > 0.2  # it slid forward ...
+    assert angle > 0.1  # ... and turned left, towards the slower steerer

@@ -47,7 +47,7 @@ async def test_recording_and_replay(tmp_path: Path, capsys: pytest.CaptureFixtur
     await _record(rec)
     header, ticks = read_recording(rec)
     assert header["size"] == [12.0, 9.0]
-    assert len(ticks) == 51  # the start and 50 ticks
+    assert len(ticks) == 52  # the start, the walkers' first (stop) tick and 50 more
     assert ticks[-1]["robots"]["ernst"][:2] != ticks[1]["robots"]["ernst"][:2]
     assert set(ticks[1]["commands"]) == {"ernst", "moseley"}
     png = tmp_path / "run.png"

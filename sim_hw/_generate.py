@@ -1,0 +1,91 @@
+"""Seeded generators of continuous arenas: random obstacle fields and double corridors."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ._spec import MarkerSpec, ObstacleSpec, WorldSpec
+
+
+def random_obstacles(
+    size: tuple[float, float] = (10.0, 10.0),
+    count: int = 20,
+    rng: np.random.Generator | None = None,
+    *,
+    min_size: float = 0.2,
+    max_size: float = 0.8,
+    clearance: float = 0.6,
+    keep_clear: tuple[tuple[float, float, float], ...] = (),
+) -> WorldSpec:
+    """An arena with up to ``count`` boxes and discs placed at random, ``clearance`` apart from
+    each other and from the walls, and away from each ``(x, y, radius)`` in ``keep_clear`` (the
+    bottom-left spawn corner is always kept clear). Same generator state → same arena."""
+    rng = rng if rng is not None else np.random.default_rng(0)
+    w, h = size
+    placed: list[tuple[float, float, float]] = [(0.0, 0.0, 2.0), *keep_clear]
+    obstacles: list[ObstacleSpec] = []
+    for _ in range(count * 50):
+        if len(obstacles) >= count:
+            break
+        extent = float(rng.uniform(min_size, max_size))
+        r = extent / 2 * (math.sqrt(2) if extent else 1)
+        x = float(rng.uniform(r + clearance, max(r + clearance, w - r - clearance)))
+        y = float(rng.uniform(r + clearance, max(r + clearance, h - r - clearance)))
+        round_one = bool(rng.integers(2))
+        angle = float(rng.uniform(0, math.pi))
+        if any(math.hypot(x - px, y - py) < r + pr + clearance for px, py, pr in placed):
+            continue
+        placed.append((x, y, r))
+        if round_one:
+            obstacles.append(ObstacleSpec("circle", center=(x, y), radius=extent / 2))
+        else:
+            obstacles.append(ObstacleSpec("box", center=(x, y), size=(extent, extent), angle=angle))
+    return WorldSpec(size=size, name=f"random-{count}", obstacles=tuple(obstacles))
+
+
+def double_corridor(
+    length: float = 20.0, ratio: float = 1.0, width: float = 1.0, room: float = 3.0
+) -> WorldSpec:
+    """Ducatelle et al.'s double corridor (Fig. 3): a source room (bottom) and a target room
+    (top) joined by a straight right corridor of ``length`` and a left one about ``ratio`` times
+    as long (a detour sideways). Markers ``source`` and ``target`` sit in the rooms."""
+    if ratio < 1.0:
+        raise ValueError("ratio must be >= 1")
+    c = width
+    detour = (ratio - 1.0) * length / 2.0
+    margin = 1.0
+    left = margin  # x of the left corridor's outer strip
+    entry = left + detour  # x where the left corridor leaves the rooms
+    right = entry + c + max(2.0, 2 * c)
+    w = right + c + margin
+    y0, y1 = room, room + length
+    free = [
+        (right, y0, right + c, y1),
+        (left, y0, left + c, y1),
+        (left, y0, entry + c, y0 + c),
+        (left, y1 - c, entry + c, y1),
+    ]
+    xs = sorted({0.0, left, left + c, entry, entry + c, right, right + c, w})
+    ys = sorted({y0, y0 + c, y1 - c, y1})
+    obstacles = []
+    for i in range(len(xs) - 1):
+        for j in range(len(ys) - 1):
+            cx, cy = (xs[i] + xs[i + 1]) / 2, (ys[j] + ys[j + 1]) / 2
+            sx, sy = xs[i + 1] - xs[i], ys[j + 1] - ys[j]
+            if sx <= 1e-9 or sy <= 1e-9:
+                continue
+            if any(a <= cx <= c2 and b <= cy <= d for a, b, c2, d in free):
+                continue
+            obstacles.append(ObstacleSpec("box", center=(cx, cy), size=(sx, sy)))
+    markers = (
+        MarkerSpec("target", "source", (w / 2, room / 2), 0.5),
+        MarkerSpec("target", "target", (w / 2, y1 + room / 2), 0.5),
+    )
+    return WorldSpec(
+        size=(w, y1 + room),
+        name=f"double-corridor-r{ratio:g}",
+        obstacles=tuple(obstacles),
+        markers=markers,
+    )

@@ -1,0 +1,320 @@
+"""The robots' hardware interface (robots/hal.py) implemented on a simulated world.
+
+One class, :class:`SimHardware`, serves both backends: it caches the readings of the last tick,
+collects the commands for the next one, and exchanges them through an ``exchange(tick,
+command) -> readings`` coroutine — a direct call into a :class:`WorldServer` in process, or one
+zenoh call per tick to the world process. Concurrent waiters on a tick share one exchange, so a
+robot sends exactly one command per tick however many of its tasks wait.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import math
+import time
+from collections.abc import AsyncIterator, Awaitable, Callable
+from typing import Any
+
+from robots.hal import (
+    BumperSide,
+    FloorCell,
+    Hardware,
+    PushResult,
+    Sighting,
+)
+
+from ._world import TICK, Command, Readings
+
+Exchange = Callable[[int, Command], Awaitable[Readings]]
+
+PUSH_SPEED = 0.2
+"""Forward speed (m/s) a push test asks for; the force bound decides whether it is reached."""
+MOVED = 0.02
+"""Displacement (m) above which a pushed object counts as moved."""
+
+
+class SimHardware:
+    """Readings cache and command buffer of one simulated robot; its devices are views of it."""
+
+    tick_period = TICK
+
+    def __init__(
+        self, robot_id: str, spec: dict[str, Any], readings: Readings, exchange: Exchange
+    ) -> None:
+        self.id = robot_id
+        self.spec = spec
+        self.readings = readings
+        self._exchange = exchange
+        self._v = 0.0
+        self._w = 0.0
+        self._push: float | None = None
+        self._led: str | None = None
+        self._floor: list[Any] | None = None
+        self._inflight: asyncio.Future[BaseException | None] | None = None
+        self._pump: asyncio.Task[None] | None = None
+        self._pumps = 0
+        self.max_speed = float(spec["max_speed"])
+
+    # -- clock ---------------------------------------------------------------------------------
+
+    def now(self) -> float:
+        """Simulated time of the last readings."""
+        return float(self.readings["t"])
+
+    async def tick(self) -> None:
+        """Send this tick's command, wait for the next readings (shared by concurrent callers)."""
+        pending = self._inflight
+        if pending is not None:  # another task of this robot is exchanging: wait for it
+            failure = await asyncio.shield(pending)
+            if failure is not None:
+                raise failure
+            return
+        done: asyncio.Future[BaseException | None] = asyncio.get_running_loop().create_future()
+        self._inflight = done
+        try:
+            await self._exchange_once()
+        except BaseException as exc:
+            done.set_result(exc if isinstance(exc, Exception) else None)
+            raise
+        else:
+            done.set_result(None)
+        finally:
+            self._inflight = None
+
+    async def _exchange_once(self) -> None:
+        command: Command = {"v": self._v, "w": self._w, "push": self._push}
+        if self._led is not None:
+            command["led"] = self._led
+        if self._floor is not None:
+            command["floor"] = self._floor
+        self._floor = None
+        self.readings = await self._exchange(int(self.readings["tick"]), command)
+
+    async def sleep(self, dt: float) -> None:
+        """Tick until ``dt`` simulated seconds have passed (at least one tick)."""
+        end = self.now() + dt - 1e-9
+        await self.tick()
+        while self.now() < end:
+            await self.tick()
+
+    @contextlib.asynccontextmanager
+    async def ticking(self) -> AsyncIterator[None]:
+        """Tick in the background for the duration of the block (nested blocks are fine).
+
+        On the way out the exchange under way is finished, not cancelled, so the world never
+        sees half a tick.
+        """
+        self._pumps += 1
+        pump = self._pump
+        if pump is None or pump.done():
+            pump = self._pump = asyncio.get_running_loop().create_task(self._run_pump())
+        try:
+            yield
+        finally:
+            self._pumps -= 1
+            if self._pumps == 0:
+                await asyncio.shield(pump)
+
+    async def _run_pump(self) -> None:
+        while self._pumps > 0:
+            await self.tick()
+            await asyncio.sleep(0)  # let the block's own tasks run between ticks
+
+    # -- drive, LED, floor ----------------------------------------------------------------------
+
+    def set_velocity(self, v: float, omega: float) -> None:
+        """Drive command for the next tick (clipped by the world to the robot's limits)."""
+        self._v, self._w = float(v), float(omega)
+
+    def stop(self) -> None:
+        """Zero both speeds from the next tick."""
+        self._v = self._w = 0.0
+
+    def show(self, status: str) -> None:
+        """Set the LED status others' cameras read."""
+        self._led = str(status)
+
+    def read(self) -> FloorCell:
+        """The floor cell under the robot (a pending write shows at once)."""
+        value, colour = self._floor if self._floor is not None else self.readings["floor"]
+        return FloorCell(int(value), str(colour))
+
+    def write(self, value: int, colour: str = "") -> None:
+        """Write the floor cell under the robot at the next tick."""
+        self._floor = [int(value), str(colour)]
+
+    # -- sensors --------------------------------------------------------------------------------
+
+    def ranges(self) -> tuple[float, ...]:
+        """Sonar ranges of the last tick."""
+        return tuple(self.readings["sonar"] or ())
+
+    def pressed(self) -> bool:
+        """Whether the bumper touches anything."""
+        return self.readings["bump"] is not None
+
+    def side(self) -> BumperSide | None:
+        """Which side of the bumper touches."""
+        return self.readings["bump"]
+
+    def pose(self) -> tuple[float, float, float]:
+        """Dead-reckoned pose."""
+        x, y, th = self.readings["odom"]
+        return (float(x), float(y), float(th))
+
+    def sightings(self) -> tuple[Sighting, ...]:
+        """Camera detections of the last tick."""
+        return tuple(
+            Sighting(str(k), str(i), str(s), float(r), float(b))
+            for k, i, s, r, b in self.readings["cam"] or ()
+        )
+
+    def position(self) -> tuple[float, float, float] | None:
+        """Ground-truth pose from the radio locator (for the transport only)."""
+        loc = self.readings["loc"]
+        return None if loc is None else (float(loc[0]), float(loc[1]), float(loc[2]))
+
+    async def push(self, force: float, duration: float) -> PushResult:
+        """Push forward with at most ``force`` N for ``duration`` s, stop, report the motion."""
+        self._push = float(force)
+        self._v, self._w = PUSH_SPEED, 0.0
+        try:
+            await self.sleep(duration)
+            got = self.readings["push"]
+        finally:
+            self._push = None
+            self.stop()
+        if got is None:
+            return PushResult(None, 0.0, False)
+        obj, disp = got
+        return PushResult(obj, float(disp), float(disp) >= MOVED)
+
+    def hardware(self) -> Hardware:
+        """The HAL bundle for robot code."""
+        spec = self.spec
+        sonar = spec.get("sonar")
+        camera = spec.get("camera")
+        return Hardware(
+            id=self.id,
+            clock=_Clock(self),
+            drive=_Drive(self),
+            odometry=_Odometry(self),
+            sonar=_Sonar(self, sonar) if sonar else None,
+            bumper=_Bumper(self),
+            camera=_Camera(self, camera) if camera else None,
+            led=_Led(self),
+            radio=_Radio(self) if spec.get("radio", True) else None,
+            floor=_Floor(self),
+            push=_Push(self),
+        )
+
+
+# Thin device views, so that each HAL protocol exposes only its own methods.
+
+
+class _Clock:
+    tick_period = TICK
+
+    def __init__(self, hw: SimHardware) -> None:
+        self.now, self.tick, self.sleep, self.ticking = hw.now, hw.tick, hw.sleep, hw.ticking
+
+
+class _Drive:
+    def __init__(self, hw: SimHardware) -> None:
+        self.max_speed = hw.max_speed
+        self.set_velocity, self.stop = hw.set_velocity, hw.stop
+
+
+class _Odometry:
+    def __init__(self, hw: SimHardware) -> None:
+        self.pose = hw.pose
+
+
+class _Sonar:
+    def __init__(self, hw: SimHardware, spec: dict[str, Any]) -> None:
+        n = int(spec["rays"])
+        self.angles = tuple(2.0 * math.pi * i / n for i in range(n))
+        self.max_range = float(spec["max_range"])
+        self.ranges = hw.ranges
+
+
+class _Bumper:
+    def __init__(self, hw: SimHardware) -> None:
+        self.pressed, self.side = hw.pressed, hw.side
+
+
+class _Camera:
+    def __init__(self, hw: SimHardware, spec: dict[str, Any]) -> None:
+        self.max_range = float(spec["max_range"])
+        self.fov = float(spec["fov"])
+        self.sightings = hw.sightings
+
+
+class _Led:
+    def __init__(self, hw: SimHardware) -> None:
+        self.show = hw.show
+
+
+class _Radio:
+    def __init__(self, hw: SimHardware) -> None:
+        self.position = hw.position
+
+
+class _Floor:
+    def __init__(self, hw: SimHardware) -> None:
+        self.read, self.write = hw.read, hw.write
+
+
+class _Push:
+    def __init__(self, hw: SimHardware) -> None:
+        self.push = hw.push
+
+
+async def in_process(server: Any, robot_id: str, spec: dict[str, Any] | None = None) -> Hardware:
+    """Join ``server`` (a :class:`WorldServer` in this process) and return the robot's HAL."""
+    joined = await server.join(robot_id, spec)
+
+    async def exchange(tick: int, command: Command) -> Readings:
+        return await server.step(robot_id, tick, command)
+
+    return SimHardware(robot_id, joined["spec"], joined["readings"], exchange).hardware()
+
+
+async def remote(
+    node: Any,
+    robot_id: str,
+    spec: dict[str, Any] | None = None,
+    *,
+    world: str = "world",
+    call_timeout: float = 30.0,
+) -> Hardware:
+    """Join the world process ``world`` over ``node`` (a ``mover.Node``); return the HAL.
+
+    One call per tick each way: ``step(robot, tick, command) -> readings``. ``call_timeout``
+    must outlast the world's own drop timeout, since in lock-step a reply waits for every robot.
+    The robot's id must be its node's name: the world drops the robot when that member leaves.
+    """
+    from mover import RobotLost, UnknownRobot
+
+    async def call(procedure: str, *args: Any) -> Any:
+        # The world may look lost for a moment when the machine is overloaded (a missed
+        # lease); join and step are idempotent, so wait for it to be back and ask again.
+        deadline = time.monotonic() + call_timeout
+        while True:
+            left = deadline - time.monotonic()
+            if world not in node.team:
+                await node.team.wait_for([world], timeout=max(left, 0.1))
+            try:
+                return await node.call(world, procedure, *args, timeout=max(left, 0.1))
+            except (RobotLost, UnknownRobot):
+                if time.monotonic() >= deadline:
+                    raise
+                await asyncio.sleep(0.05)
+
+    joined = await call("join", robot_id, spec or {})
+
+    async def exchange(tick: int, command: Command) -> Readings:
+        return await call("step", robot_id, tick, command)
+
+    return SimHardware(robot_id, joined["spec"], joined["readings"], exchange).hardware()

@@ -1,0 +1,156 @@
+"""The ``mover world`` and ``mover replay`` verbs (entry points of the ``mover`` command).
+
+``mover world WORLDFILE [--lockstep] [--speed X] [--seed N] [--record FILE]`` runs the world
+process: it joins the team from the environment (``MOVER_*``), exports ``join``/``step``/``leave``
+and streams snapshots on ``world/state``. ``mover replay FILE --out PNG`` draws a recording.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import logging
+from pathlib import Path
+from typing import Any
+
+from mover._cli import UsageError
+
+log = logging.getLogger("sim_hw.cli")
+
+
+def _positive(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"must be positive, got {text}")
+    return value
+
+
+def register_world(sub: Any) -> None:
+    """Add ``world`` to the ``mover`` command's sub-parsers."""
+    p = sub.add_parser("world", help="run a simulated world process", description=run_world.__doc__)
+    p.add_argument("worldfile", metavar="WORLDFILE", help="a .toml or .json world file")
+    p.add_argument(
+        "--lockstep",
+        action="store_true",
+        help="advance only when every robot has sent its command for the tick",
+    )
+    p.add_argument(
+        "--speed",
+        type=_positive,
+        default=1.0,
+        help="real-time mode: simulated seconds per wall second (default 1)",
+    )
+    p.add_argument("--seed", type=int, default=0, help="seed of the sensor noise")
+    p.add_argument("--record", metavar="FILE", help="record the run as JSON lines")
+    p.add_argument(
+        "--expect",
+        type=int,
+        default=0,
+        metavar="N",
+        help="lock-step: wait for N robots before the first tick",
+    )
+    p.add_argument(
+        "--timeout",
+        type=_positive,
+        default=2.0,
+        metavar="S",
+        help="lock-step: drop a robot silent for S wall seconds (default 2)",
+    )
+    p.add_argument("--until", type=_positive, metavar="T", help="stop at simulated time T")
+    p.add_argument(
+        "--quit-when-empty",
+        action="store_true",
+        help="stop once robots have come and all have left",
+    )
+    p.add_argument(
+        "--state-rate",
+        type=float,
+        default=2.0,
+        metavar="HZ",
+        help="snapshots per simulated second on world/state (0: none)",
+    )
+    p.add_argument("--name", default="world", help="the world process's node name")
+    p.set_defaults(func=run_world)
+
+
+def run_world(args: argparse.Namespace) -> int:
+    """Run a world process until interrupted (or --until, --quit-when-empty)."""
+    from mover import NodeConfig, Team
+
+    from . import Recorder, WorldFileError, WorldServer, load_world
+    from ._process import run_world_process
+    from ._world import TICK, World
+
+    try:
+        spec = load_world(args.worldfile)
+    except WorldFileError as exc:
+        raise UsageError(str(exc)) from None
+    if args.expect < 0:
+        raise UsageError(f"--expect must be >= 0, got {args.expect}")
+    try:
+        team, config = Team.from_env(), NodeConfig.from_env()
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    world = World(spec, seed=args.seed)
+    recorder = None
+    if args.record:
+        try:
+            recorder = Recorder(args.record, world)
+        except OSError as exc:
+            raise UsageError(f"cannot write {args.record}: {exc.strerror or exc}") from None
+    every = round(1.0 / (args.state_rate * TICK)) if args.state_rate > 0 else 0
+    server = WorldServer(
+        world,
+        lockstep=args.lockstep,
+        speed=args.speed,
+        expect=args.expect,
+        timeout=args.timeout,
+        snapshot_every=max(every, 1) if every else 0,
+        on_tick=recorder,
+    )
+    try:
+        asyncio.run(
+            run_world_process(
+                server,
+                name=args.name,
+                until=args.until,
+                quit_when_empty=args.quit_when_empty,
+                team=team,
+                config=config,
+            )
+        )
+    finally:
+        if recorder is not None:
+            recorder.close()
+    return 0
+
+
+def register_replay(sub: Any) -> None:
+    """Add ``replay`` to the ``mover`` command's sub-parsers."""
+    p = sub.add_parser(
+        "replay", help="draw a recorded run's trajectories to a PNG", description=run_replay.__doc__
+    )
+    p.add_argument("file", metavar="FILE", help="a recording made with mover world --record")
+    p.add_argument("--out", required=True, metavar="PNG", help="the image to write")
+    p.set_defaults(func=run_replay)
+
+
+def run_replay(args: argparse.Namespace) -> int:
+    """Draw the arena and the trajectories of a recording."""
+    from ._record import plot_recording
+
+    if not Path(args.file).is_file():
+        raise UsageError(f"{args.file}: no such file")
+    if not str(args.out).endswith(".png"):
+        raise UsageError(f"--out must name a .png file, got {args.out!r}")
+    try:
+        plot_recording(args.file, args.out)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    except OSError as exc:
+        raise UsageError(f"cannot write {args.out}: {exc.strerror or exc}") from None
+    print(args.out)
+    return 0
