@@ -26,7 +26,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         default="sim",
         help="hardware backend: sim (world process over zenoh), none (workstation)",
     )
-    p.add_argument("--world", default="world", help="name of the world process (sim backend)")
+    p.add_argument("--world", default=None,
+                   help="name of the world process (sim: 'world', grid: 'gridworld' by default)")
     p.add_argument("--spec", metavar="JSON", help="the robot's body and devices, as JSON")
     p.add_argument(
         "--team-file",
@@ -89,7 +90,11 @@ def run(args: argparse.Namespace) -> int:
             overrides=config.overrides,
         )
     kind = args.kind or entry.get("kind", "robot")
-    options = {"world": args.world} if args.hardware == "sim" else {}
+    options: dict[str, Any] = {}
+    if args.hardware == "sim":
+        options = {"world": args.world or "world"}
+    elif args.hardware == "grid" and args.world:
+        options = {"world": args.world}
     try:
         asyncio.run(
             run_robot(

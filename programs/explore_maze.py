@@ -1,0 +1,132 @@
+"""Distributed maze exploration as robot processes (Linardakis et al., CU-LVP and baselines).
+
+Every member runs the same :class:`~robots.explore.ExplorerAgent` the in-process runner
+(``programs/maze_experiment.py``) uses, one per process. Per round a robot
+
+1. reads its star sensor (view rays) and records the cells on its own map, at the cell its
+   odometry says it is on (its start cell, given at launch, plus the cells it has moved);
+2. broadcasts the agent's message (position, goal, regions, only the map cells that changed)
+   with mover's range-limited broadcast;
+3. waits for the broadcasts of this round from the members the radio medium says are in range
+   (the grid world's step reply tells), so that it hears exactly what the in-process agent
+   would; a member that leaves the team is not waited for;
+4. decides and moves.
+
+The team's start cells and the maze's shape are launch data, as team membership is (the
+agents derive the same Voronoi partition from them); agent ``i`` is the ``i``-th member in
+name order, which is also the order in which the world applies moves. The run ends when the
+world's observer says everything the robots can see has been seen: with the same maze, seed
+and starts it takes exactly as many rounds as the in-process run.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from mover import pack
+from robots.explore import FREE, OBSTACLE, STAY, UNKNOWN, ExplorerAgent, make_policy
+from robots.grid_hal import GridHardware, direction_of
+
+from .foraging import member_index, start_round
+
+TOPIC = "maze"
+#: How long a robot waits for one member's broadcast of a round before going on without it.
+HEAR_TIMEOUT = 10.0
+
+
+async def _hear(robot: Any, sub: Any, inbox: dict[int, dict[str, Any]], round: int,
+                expected: set[str]) -> dict[str, dict[str, Any]]:
+    """The broadcasts of ``round`` from ``expected``; others are kept for their round."""
+    node = robot.node
+    got = inbox.pop(round, {})
+    deadline = time.monotonic() + HEAR_TIMEOUT
+    while True:
+        missing = {m for m in expected - set(got) if m in node.team}
+        if not missing or time.monotonic() > deadline:
+            if missing:
+                robot.log.warning("round %d: no broadcast from %s", round, sorted(missing))
+            return {s: m for s, m in got.items() if s in expected}
+        try:
+            msg = await sub.get(timeout=0.25)
+        except TimeoutError:
+            continue
+        k = int(msg.data["round"])
+        if k == round:
+            got[msg.sender] = msg.data["agent"]
+        elif k > round:
+            inbox.setdefault(k, {})[msg.sender] = msg.data["agent"]
+
+
+def map_text(agent: ExplorerAgent) -> str:
+    """An agent's map as text: ``#`` obstacle, ``.`` free, ``?`` unknown, ``@`` the agent."""
+    chars = {UNKNOWN: "?", FREE: ".", OBSTACLE: "#"}
+    rows = [[chars.get(int(v), "?") for v in row] for row in agent.known]
+    r, c = agent.position
+    rows[r][c] = "@"
+    return "\n".join("".join(row) for row in rows) + "\n"
+
+
+async def explore_maze(robot: Any, team: Any, method: str = "cu_lvp", seed: int = 0,
+                       starts: list[list[int]] | None = None,
+                       shape: list[int] | None = None, max_rounds: int = 0,
+                       snapshot_dir: str = "") -> dict[str, Any]:
+    """Explore the maze with ``method`` (cu_lvp, nf, cu_mnm, cu_jgr, cu_bso, hedac).
+
+    ``starts`` are every member's start cell in member-name order and ``shape`` the maze's
+    (rows, cols). ``seed`` gives agent ``i`` the ``i``-th child of ``SeedSequence(seed)``, as
+    the in-process ``make_team`` does. With ``snapshot_dir`` the robot writes its map there
+    (``<robot>.txt``) at the end. Returns rounds, cells moved, message bytes sent (msgpack),
+    cells known.
+    """
+    if not starts or not shape:
+        raise ValueError("starts and shape are needed (launch data: the team's start cells)")
+    hw: GridHardware = robot.hw
+    n = len(team.members)
+    if len(starts) != n:
+        raise ValueError(f"{len(starts)} starts for {n} members")
+    i = member_index(robot, team)
+    cells = [(int(r), int(c)) for r, c in starts]
+    rng = np.random.default_rng(np.random.SeedSequence(seed).spawn(n)[i])
+    agent = ExplorerAgent(i, (int(shape[0]), int(shape[1])), cells,
+                          make_policy(method.replace("_", "-")), rng)
+    radio = hw.radio
+    assert radio is not None, "maze exploration needs a radio"
+    reach = radio.range + 2  # the medium decides who hears; moving one cell must not lose it
+    topic = f"{TOPIC}/{team.run}"
+    rounds = moves = sent = 0
+    inbox: dict[int, dict[str, Any]] = {}
+    # subscribed before the start step: no member broadcasts before every one listens
+    async with robot.node.subscribe(topic) as sub, \
+            hw.clock.owned(at=await start_round(hw, team)):
+        while True:
+            dr, dc, _ = hw.odometry.pose()
+            r, c = cells[i][0] + int(dr), cells[i][1] + int(dc)
+            agent.observe(seen_cells=[(r + s.d_row, c + s.d_col, int(s.obstacle))
+                                      for s in hw.senses.rays()], position=(r, c))
+            if hw.clock.ended() or (max_rounds and rounds >= max_rounds):
+                break
+            now = hw.clock.now()
+            message = agent.outgoing_message()
+            sent += len(pack(message))
+            await robot.node.broadcast(topic, {"round": now, "agent": message},
+                                       range=reach if reach != float("inf") else None,
+                                       reliable=True)
+            heard = await _hear(robot, sub, inbox, now, set(radio.in_range()))
+            agent.observe(heard_messages=sorted(heard.values(), key=lambda m: m["id"]))
+            move = agent.decide()
+            hw.drive.move(direction_of(*move) if move != STAY else None)
+            await hw.clock.tick()
+            moves += hw.drive.moved()
+            rounds += 1
+    if snapshot_dir:
+        path = Path(snapshot_dir) / f"{robot.id}.txt"
+        path.parent.mkdir(parents=True, exist_ok=True)
+        await asyncio.to_thread(path.write_text, map_text(agent))
+    return {"rounds": rounds, "moves": moves, "index": i, "sent_bytes": sent,
+            "known": int(np.count_nonzero(agent.known != UNKNOWN)),
+            "finished": hw.clock.ended()}

@@ -1,0 +1,266 @@
+"""The ``grid`` hardware backend: a robot's grid HAL (robots/grid_hal.py) over a grid world.
+
+:class:`GridRobot` caches the last perception and collects this round's action; one
+``step(robot, round, action)`` call to the world process per round exchanges them.
+
+Rounds belong to whoever drives them. The robot process ticks while idle, so that a lock-step
+world is not held up by a robot that runs no program; those idle ticks are paced
+(``idle_period``) and stop while a program owns the clock (:meth:`GridRobot.owned`), so that a
+program's rounds are its own: nothing is sent for a round until the program has decided.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import contextvars
+import time
+from collections.abc import AsyncIterator, Awaitable, Callable
+from typing import Any
+
+from robots.grid_hal import OFFSETS, GridHardware, Here, Near, Seen
+
+Exchange = Callable[[int, dict[str, Any]], Awaitable[dict[str, Any]]]
+
+_OWNER: contextvars.ContextVar[object | None] = contextvars.ContextVar("grid_owner", default=None)
+
+
+class GridRobot:
+    """Perception cache, action buffer and round clock of one grid robot."""
+
+    def __init__(self, robot_id: str, spec: dict[str, Any], readings: dict[str, Any],
+                 exchange: Exchange, *, idle_period: float = 0.01) -> None:
+        self.id = robot_id
+        self.spec = spec
+        self.readings = readings
+        self.idle_period = idle_period
+        self.range = float(spec.get("radio", float("inf")))
+        self._exchange = exchange
+        self._action: dict[str, Any] = {}
+        self._offset = [0, 0]
+        self._lock = asyncio.Lock()
+        self._owner: object | None = None
+        self._hold_at: int | None = None
+        self._changed = asyncio.Event()
+
+    # -- the clock ------------------------------------------------------------------------------
+
+    def now(self) -> int:
+        """The round of the current perception."""
+        return int(self.readings["round"])
+
+    def ended(self) -> bool:
+        """Whether the world's observer ended the run."""
+        return bool(self.readings.get("over", False))
+
+    def _held(self) -> bool:
+        if self._owner is not None and _OWNER.get() is not self._owner:
+            return True
+        return self._owner is None and self._hold_at is not None and self.now() >= self._hold_at
+
+    async def tick(self) -> None:
+        """Send this round's action and wait for the next perception.
+
+        The owner of the clock exchanges at once; any other task (the idle loop) waits while
+        the clock is owned or held, and is paced by ``idle_period``.
+        """
+        owner = self._owner is not None and _OWNER.get() is self._owner
+        while True:
+            if not owner:
+                while self._held():
+                    await self._wait_change()
+                await asyncio.sleep(self.idle_period)
+            async with self._lock:
+                if not owner and self._held():
+                    continue
+                action, self._action = self._action, {}
+                wanted = action.get("move")
+                self.readings = await self._exchange(self.now(), action)
+                if wanted is not None and self.readings.get("moved"):
+                    dr, dc = OFFSETS[int(wanted)]
+                    self._offset[0] += dr
+                    self._offset[1] += dc
+            self._notify()
+            return
+
+    def _notify(self) -> None:
+        self._changed.set()
+        self._changed = asyncio.Event()
+
+    async def _wait_change(self) -> None:
+        await self._changed.wait()
+
+    @contextlib.asynccontextmanager
+    async def owned(self, at: int) -> AsyncIterator[None]:
+        """Drive the rounds from round ``at`` (see robots.grid_hal.RoundClock.owned)."""
+        if self._owner is not None or self._hold_at is not None:
+            raise RuntimeError("the clock is already owned")
+        self._hold_at = at
+        self._notify()
+        try:
+            while self.now() < at:
+                await self._wait_change()
+            async with self._lock:  # an idle exchange under way has finished
+                pass
+            if self.now() != at:
+                raise RuntimeError(f"round {at} had already passed (now {self.now()})")
+            token = object()
+            self._owner = token
+            reset = _OWNER.set(token)
+            try:
+                yield
+            finally:
+                _OWNER.reset(reset)
+        finally:
+            self._owner = None
+            self._hold_at = None
+            self._notify()
+
+    # -- senses -----------------------------------------------------------------------------------
+
+    def here(self) -> Here:
+        """The cell under the robot."""
+        v, col, res, base, ph = self.readings["here"]
+        return Here(int(v), int(col), int(res), bool(base), float(ph))
+
+    def around(self) -> tuple[Near, ...]:
+        """The neighbouring cells, in direction order."""
+        return tuple(Near(int(d), int(s), int(v), int(c), int(r), bool(b), float(p))
+                     for d, s, v, c, r, b, p in self.readings["around"])
+
+    def rays(self) -> tuple[Seen, ...]:
+        """Cells seen along the view rays, relative to the robot."""
+        return tuple(Seen(int(dr), int(dc), bool(v)) for dr, dc, v in self.readings["rays"])
+
+    def compass(self) -> tuple[float, float]:
+        """Unit vector toward the base."""
+        hr, hc = self.readings["home"]
+        return (float(hr), float(hc))
+
+    # -- actions ----------------------------------------------------------------------------------
+
+    def read(self) -> tuple[int, int]:
+        """(value, colour) under the robot; a pending write shows at once."""
+        v, c = self.readings["here"][:2]
+        return (int(self._action.get("value", v)), int(self._action.get("colour", c)))
+
+    def write(self, value: int | None = None, colour: int | None = None) -> None:
+        """Write the cell under the robot at this round's end."""
+        if value is not None:
+            self._action["value"] = int(value)
+        if colour is not None:
+            self._action["colour"] = int(colour)
+
+    def scent(self, amount: float) -> None:
+        """Add pheromone here at this round's end."""
+        if amount:
+            self._action["drop"] = float(self._action.get("drop", 0.0)) + float(amount)
+
+    def carried(self) -> int:
+        """Units carried (as of the last perception)."""
+        return int(self.readings["carried"])
+
+    def pick(self, units: int) -> None:
+        """Pick up to ``units`` here at this round's end."""
+        if units:
+            self._action["load"] = int(units)
+
+    def drop(self) -> None:
+        """Drop the load at this round's end."""
+        self._action["unload"] = True
+
+    def move(self, direction: int | None) -> None:
+        """Move one cell at this round's end (None: stay)."""
+        if direction is None:
+            self._action.pop("move", None)
+        else:
+            self._action["move"] = int(direction)
+
+    def stop(self) -> None:
+        """Stay this round."""
+        self._action.pop("move", None)
+
+    def moved(self) -> bool:
+        """Whether the last round's move happened."""
+        return bool(self.readings.get("moved", False))
+
+    def pose(self) -> tuple[float, float, float]:
+        """Cells moved since the start: (d_row, d_col, 0)."""
+        return (float(self._offset[0]), float(self._offset[1]), 0.0)
+
+    def position(self) -> tuple[float, float, float] | None:
+        """The radio's locator: the centre of the robot's cell (transport only)."""
+        loc = self.readings.get("loc")
+        return None if loc is None else (float(loc[0]), float(loc[1]), float(loc[2]))
+
+    def in_range(self) -> frozenset[str]:
+        """Members within radio range this round, as the medium says."""
+        return frozenset(self.readings.get("hears", ()))
+
+    def hardware(self) -> GridHardware:
+        """The HAL bundle for robot code."""
+        return GridHardware(
+            id=self.id,
+            clock=_View(self, "now", "ended", "tick", "owned"),  # type: ignore[arg-type]
+            drive=_View(self, "move", "stop", "moved"),  # type: ignore[arg-type]
+            odometry=_View(self, "pose"),  # type: ignore[arg-type]
+            senses=_View(self, "here", "around", "rays", "compass"),  # type: ignore[arg-type]
+            floor=_View(self, "read", "write", "scent"),  # type: ignore[arg-type]
+            gripper=_View(self, "carried", "pick", "drop"),  # type: ignore[arg-type]
+            radio=_View(self, "position", "in_range", range=self.range),  # type: ignore[arg-type]
+        )
+
+
+class _View:
+    """A device: a few of the robot's methods, so each protocol exposes only its own."""
+
+    def __init__(self, robot: GridRobot, *names: str, **values: Any) -> None:
+        for name in names:
+            setattr(self, name, getattr(robot, name))
+        for name, value in values.items():
+            setattr(self, name, value)
+
+
+async def in_process(server: Any, robot_id: str, spec: dict[str, Any] | None = None,
+                     *, idle_period: float = 0.0) -> GridHardware:
+    """Join ``server`` (a :class:`~sim_hw.grid_server.GridServer` in this process)."""
+    joined = await server.join(robot_id, spec)
+
+    async def exchange(round: int, action: dict[str, Any]) -> dict[str, Any]:
+        return await server.step(robot_id, round, action)  # type: ignore[no-any-return]
+
+    return GridRobot(robot_id, joined["spec"], joined["readings"], exchange,
+                     idle_period=idle_period).hardware()
+
+
+async def connect(node: Any, robot_id: str, spec: dict[str, Any] | None = None, *,
+                  world: str = "gridworld", call_timeout: float = 30.0,
+                  idle_period: float = 0.01) -> GridHardware:
+    """Join the grid world process ``world`` over ``node`` (a ``mover.Node``); return the HAL.
+
+    The ``grid`` hardware backend. One call per round: ``step(robot, round, action) ->
+    perception``. ``call_timeout`` must outlast the world's drop timeout. The robot's id must
+    be its node's name: the world drops the robot when that member leaves the team.
+    """
+    from mover import RobotLost, UnknownRobot
+
+    async def call(procedure: str, *args: Any) -> Any:
+        # join and step are idempotent: if the world looks lost for a moment, ask again
+        deadline = time.monotonic() + call_timeout
+        while True:
+            left = deadline - time.monotonic()
+            await node.team.wait_for([world], timeout=max(left, 0.1))
+            try:
+                return await node.call(world, procedure, *args, timeout=max(left, 0.1))
+            except (RobotLost, UnknownRobot):
+                if time.monotonic() >= deadline:
+                    raise
+                await asyncio.sleep(0.05)
+
+    joined = await call("join", robot_id, spec or {})
+
+    async def exchange(round: int, action: dict[str, Any]) -> dict[str, Any]:
+        return await call("step", robot_id, round, action)  # type: ignore[no-any-return]
+
+    return GridRobot(robot_id, joined["spec"], joined["readings"], exchange,
+                     idle_period=idle_period).hardware()

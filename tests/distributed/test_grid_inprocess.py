@@ -1,0 +1,182 @@
+"""The grid world server and the grid HAL in one process: no network, no sleeps to speak of."""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from mover import Message
+from programs.explore_maze import explore_maze
+from programs.foraging import foraging
+from programs.maze_experiment import run_trial
+from robots.grid_hal import FREE, OBSTACLE, OCCUPIED
+from sim_hw.grid import Grid, GridWorld
+from sim_hw.grid_cli import build_server
+from sim_hw.grid_remote import in_process
+from sim_hw.grid_server import GridServer, RobotDropped
+from sim_hw.maze import generate_maze, save_maze
+
+EAST, WEST = 1, 3
+
+
+def corridor_server(**kw: Any) -> GridServer:
+    grid = Grid(np.array([[1, 1, 1, 1, 1], [1, 0, 0, 0, 1], [1, 1, 1, 1, 1]]))
+    return GridServer(GridWorld(grid, (1, 1)), **kw)
+
+
+async def test_a_round_waits_for_every_robot_and_applies_actions_in_name_order() -> None:
+    server = corridor_server(exclusive=True, expect=2)
+    a, _ = await asyncio.gather(server.join("a", {"start": [1, 1]}),
+                                server.join("b", {"start": [1, 3]}))
+    assert a["readings"]["round"] == 0 and a["readings"]["hears"] == ["b"]
+    assert [n[1] for n in a["readings"]["around"]] == [OBSTACLE, FREE, OBSTACLE, OBSTACLE]
+    step_a = asyncio.ensure_future(server.step("a", 0, {"move": EAST, "value": 7}))
+    await asyncio.sleep(0)
+    assert not step_a.done() and server.round == 0
+    ra, rb = await asyncio.gather(step_a, server.step("b", 0, {"move": WEST}))
+    # a moved first into the middle cell; b's move into it then failed
+    assert ra["moved"] and not rb["moved"] and server.round == 1
+    assert server.world.marks[server.grid.index((1, 1))] == 7
+    assert ra["around"][EAST][1] == OCCUPIED
+    again = await server.step("a", 0, {"move": EAST})  # a retry of a done round
+    assert again is ra
+
+
+async def test_a_silent_robot_is_dropped_after_the_timeout(caplog: pytest.LogCaptureFixture
+                                                           ) -> None:
+    server = corridor_server(expect=2, timeout=0.05)
+    await asyncio.gather(server.join("a", {}), server.join("b", {}))
+    with caplog.at_level(logging.WARNING, logger="sim_hw.grid_server"):
+        reply = await asyncio.wait_for(server.step("a", 0, {}), 2)
+    assert reply["round"] == 1 and server.dropped == ["b"]
+    assert "robot b sent no action for round 0" in caplog.text
+    with pytest.raises(RobotDropped):
+        await server.step("b", 0, {})
+
+
+class _Bus:
+    """In-process stand-ins for the node's broadcast, subscriptions and team view."""
+
+    def __init__(self, names: list[str]) -> None:
+        self.queues: dict[str, asyncio.Queue[Message]] = {n: asyncio.Queue() for n in names}
+        self.values: dict[str, Any] = {}
+        self.all_in = asyncio.Event()
+        self.members = sorted(names)
+
+
+class _Node:
+    def __init__(self, bus: _Bus, name: str) -> None:
+        self.bus, self.name, self.team = bus, name, set(bus.members)
+
+    def subscribe(self, topic: str) -> Any:
+        queue = self.bus.queues[self.name]
+
+        class Sub:
+            async def get(self, timeout: float | None = None) -> Message:
+                return await asyncio.wait_for(queue.get(), timeout)
+
+            async def __aenter__(self) -> Any:
+                return self
+
+            async def __aexit__(self, *exc: object) -> None:
+                pass
+        return Sub()
+
+    async def broadcast(self, topic: str, data: Any, **kw: Any) -> None:
+        for name, queue in self.bus.queues.items():
+            if name != self.name:
+                queue.put_nowait(Message(self.name, topic, data, None, None, 0.0))
+
+
+class _Team:
+    def __init__(self, bus: _Bus, me: str) -> None:
+        self.bus, self.me, self.members, self.run = bus, me, bus.members, "test"
+
+    async def distributed_and(self, op: Any) -> dict[str, Any]:
+        self.bus.values[self.me] = await op()
+        if len(self.bus.values) == len(self.members):
+            self.bus.all_in.set()
+        await self.bus.all_in.wait()
+        return dict(self.bus.values)
+
+
+class _Robot:
+    def __init__(self, name: str, hw: Any, node: _Node) -> None:
+        self.id, self.hw, self.node, self.log = name, hw, node, logging.getLogger(name)
+
+
+async def _run_team(server: GridServer, names: list[str], specs: list[dict[str, Any]],
+                    program: Any, **args: Any) -> list[dict[str, Any]]:
+    hws = await asyncio.gather(*(in_process(server, n, s) for n, s in zip(names, specs,
+                                                                          strict=True)))
+
+    async def idle(hw: Any) -> None:
+        while True:
+            await hw.clock.tick()
+
+    idles = [asyncio.ensure_future(idle(hw)) for hw in hws]
+    bus = _Bus(names)
+    try:
+        return list(await asyncio.gather(*(program(_Robot(n, hw, _Node(bus, n)), _Team(bus, n),
+                                                   **args) for n, hw in zip(names, hws,
+                                                                            strict=True))))
+    finally:
+        for task in idles:
+            task.cancel()
+        await asyncio.gather(*idles, return_exceptions=True)
+
+
+@pytest.mark.parametrize(("size", "p", "seed", "method"),
+                         [(15, 0.85, 1, "cu_lvp"), (20, 0.15, 3, "cu_lvp"), (15, 0.5, 4, "nf")])
+async def test_maze_rounds_match_the_in_process_runner(tmp_path: Path, size: int, p: float,
+                                                      seed: int, method: str) -> None:
+    maze = generate_maze(size, p, np.random.default_rng(seed), n_starts=4)
+    save_maze(tmp_path / "m.json", maze)
+    ref = run_trial(maze, 4, method.replace("_", "-"), np.random.SeedSequence(seed))
+    server = build_server(str(tmp_path / "m.json"), {}, expect=4)
+    names = ["a", "b", "c", "d"]
+    starts = [list(s) for s in maze.starts[:4]]
+    out = await _run_team(server, names, [{"start": s} for s in starts], explore_maze,
+                          method=method, seed=seed, starts=starts, shape=list(maze.shape))
+    assert {o["rounds"] for o in out} == {ref["rounds"]}
+    assert sum(o["moves"] for o in out) == ref["cost"]
+
+
+async def test_foraging_in_process_finishes(tmp_path: Path) -> None:
+    (tmp_path / "g.txt").write_text("........\n..R.....\n........\n....B...\n........\n"
+                                    ".#......\n......R.\n........\n")
+    server = build_server(str(tmp_path / "g.txt"), {}, expect=3)
+    server.world.resources = [q * 200 for q in server.world.resources]
+    server.world.remaining = sum(server.world.resources)
+    out = await _run_team(server, ["x", "y", "z"], [{"view": 0}] * 3, foraging,
+                          method="marking", seed=2)
+    assert all(o["finished"] for o in out) and server.world.remaining == 0
+    text = server.snapshot_text()
+    assert text.startswith("round ") and "remaining 0" in text
+
+
+@pytest.mark.parametrize(("size", "n", "quantity", "seed", "method"),
+                         [(12, 4, 300, 1, "cmarking"), (12, 3, 300, 4, "ants")])
+async def test_sequential_turns_repeat_the_in_process_foraging_run(
+        tmp_path: Path, size: int, n: int, quantity: int, seed: int, method: str) -> None:
+    from programs.foraging_experiment import Setup, run_trial
+    from sim_hw.grid import place_resources, random_obstacles
+    from tests.distributed._grid import write_grid
+
+    env_seed, agent_seed = (seed, 1, 0), (seed, 1, 0, n, 0)
+    trial = run_trial(Setup(size, 0.05, 2, quantity), n, method, env_seed, agent_seed, 20000)
+    env = np.random.default_rng(np.random.SeedSequence(list(env_seed)))
+    base = (size // 2, size // 2)
+    grid = random_obstacles(size, size, 0.05, env, keep_free=(base,))
+    resources = place_resources(grid, 2, quantity, env, exclude=(base,))
+    path = write_grid(tmp_path / "field.json", grid.obstacles, base, resources)
+    server = build_server(str(path), {"pheromone": method == "ants"}, expect=n,
+                          turns="sequential")
+    out = await _run_team(server, [f"r{i}" for i in range(n)], [{"view": 0}] * n, foraging,
+                          method=method, seed=list(agent_seed))
+    assert trial.finished and {o["rounds"] for o in out} == {trial.iterations}
