@@ -1,0 +1,87 @@
+"""The library of robot procedures for MOVER's programs (Jennings et al., section 4.3).
+
+Each procedure runs on one robot over its HAL (``robot.hw``) and stops the motors in a
+``finally`` (a cancelled procedure leaves the robot still); each decision rule is a plain
+function or small class of readings → command, testable without a world.
+
+* search and recognition — :func:`search` (random walk, section 4.1), :func:`movable` (the push
+  test), :func:`sees` (camera recognition), :func:`recognition` (by name), :class:`Found`,
+  :class:`Wander`;
+* navigation — :func:`goto_object`, :func:`goto_point`, :func:`steer`, :func:`detour`,
+  :func:`station`;
+* manipulation — :func:`pusher`, :func:`steerer`, :class:`Path`, :func:`stations`,
+  :func:`pusher_command`, :func:`steerer_command`, :func:`object_pose`;
+* training (section 5) — :func:`snapshot`.
+"""
+
+from ._goto import (
+    approach,
+    detour,
+    follow,
+    follow_command,
+    goto_object,
+    goto_point,
+    sidestep,
+    station,
+    steer,
+    turn_to,
+)
+from ._manipulate import (
+    Path,
+    align,
+    object_pose,
+    pusher,
+    pusher_command,
+    sighting_of,
+    stations,
+    steerer,
+    steerer_command,
+)
+from ._search import (
+    Found,
+    Predicate,
+    Wander,
+    kind_ahead,
+    locate,
+    movable,
+    moved,
+    recognition,
+    search,
+    sees,
+    teammate_ahead,
+)
+from ._snapshot import snapshot
+
+__all__ = [
+    "Found",
+    "Path",
+    "Predicate",
+    "Wander",
+    "align",
+    "approach",
+    "detour",
+    "follow",
+    "follow_command",
+    "goto_object",
+    "goto_point",
+    "kind_ahead",
+    "locate",
+    "movable",
+    "moved",
+    "object_pose",
+    "pusher",
+    "pusher_command",
+    "recognition",
+    "search",
+    "sees",
+    "sidestep",
+    "sighting_of",
+    "snapshot",
+    "station",
+    "stations",
+    "steer",
+    "steerer",
+    "steerer_command",
+    "teammate_ahead",
+    "turn_to",
+]

@@ -1,0 +1,32 @@
+"""The library's public face: ``__all__`` documented, no simulator or physics inside, the
+programs registered."""
+
+from __future__ import annotations
+
+import inspect
+import subprocess
+import sys
+
+import programs
+import robots.library as library
+
+
+def test_every_public_name_exists_and_is_documented() -> None:
+    for name in library.__all__:
+        obj = getattr(library, name)
+        if inspect.isclass(obj) or inspect.isfunction(obj):
+            assert inspect.getdoc(obj), f"robots.library.{name} has no docstring"
+    public = {n for n in dir(library) if not n.startswith("_")}
+    assert public <= set(library.__all__) | {"annotations"}
+
+
+def test_the_library_needs_neither_pymunk_nor_sim_hw() -> None:
+    code = "import sys, robots.library, programs; print(sorted(m for m in sys.modules if "
+    code += "m.split('.')[0] in ('pymunk', 'sim_hw')))"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"
+
+
+def test_the_programs_are_registered() -> None:
+    assert set(programs.PROGRAMS) >= {"search_and_rescue", "follow_trainer"}
+    assert all(inspect.iscoroutinefunction(p) for p in programs.PROGRAMS.values())
