@@ -131,6 +131,8 @@ class RpcServer:
         try:
             result = await awaitable
         except asyncio.CancelledError:
+            if inspect.iscoroutine(awaitable):
+                awaitable.close()  # cancelled before it ever ran: no "never awaited" warning
             self._send(query, env, _err("Cancelled", "the call was cancelled"))
             raise
         except Exception as exc:

@@ -26,7 +26,7 @@ from mover import Node, NodeConfig, Team, free_port, launch
 from mover._programs import PROGRESS_TOPIC
 
 ROOT = Path(__file__).resolve().parents[1]
-DEFAULT_WORLD = ROOT / "worlds" / "search_rescue.toml"
+DEFAULT_WORLD = ROOT / "worlds" / "search_and_rescue.toml"
 STATE_TOPIC = "world/state"
 
 
@@ -61,11 +61,17 @@ def run(args: argparse.Namespace) -> int:
         program_args = json.loads(args.args)
     except json.JSONDecodeError as exc:
         raise UsageError(f"--args is not JSON: {exc.msg}") from None
-    return asyncio.run(demo(args, world, robots, program_args))
+    goals = [t["center"] for t in data.get("targets", []) if isinstance(t, dict) and "center" in t]
+    goal = (float(goals[0][0]), float(goals[0][1])) if goals else None
+    return asyncio.run(demo(args, world, robots, program_args, goal))
 
 
 async def demo(
-    args: argparse.Namespace, world: Path, robots: list[str], program_args: dict[str, Any]
+    args: argparse.Namespace,
+    world: Path,
+    robots: list[str],
+    program_args: dict[str, Any],
+    goal: tuple[float, float] | None = None,
 ) -> int:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)  # noqa: ASYNC240 (once, before anything starts)
@@ -141,7 +147,7 @@ async def demo(
     finally:
         await _stop(procs)
     wall = time.monotonic() - wall0
-    ok = _report(outcomes, phases, boxes, wall)
+    ok = _report(outcomes, phases, boxes, wall, goal)
     replay = await asyncio.create_subprocess_exec(
         sys.executable,
         "-m",
@@ -225,6 +231,7 @@ def _report(
     phases: dict[str, list[float]],
     boxes: dict[str, list[list[float]]],
     wall: float,
+    goal: tuple[float, float] | None,
 ) -> bool:
     print("\n== report ==")
     ok = True
@@ -250,6 +257,11 @@ def _report(
     for bid, track in boxes.items():
         if len(track) >= 2:
             moved = math.dist(track[0], track[-1])
-            print(f"box {bid!r} moved {moved:.2f} m: {_fmt(track[0])} -> {_fmt(track[-1])}")
+            line = f"box {bid!r} moved {moved:.2f} m: {_fmt(track[0])} -> {_fmt(track[-1])}"
+            if goal is not None:
+                gained = math.dist(track[0], goal) - math.dist(track[-1], goal)
+                line += f"; {gained:.2f} m nearer the goal {_fmt(list(goal))}"
+                line += f" (now {math.dist(track[-1], goal):.2f} m from it)"
+            print(line)
     print(f"wall time {wall:.1f} s")
     return ok

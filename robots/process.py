@@ -112,6 +112,10 @@ async def run_robot(
             ready()
         try:
             while True:  # keep the clock going while idle (lock-step worlds wait for us)
+                # Let the tasks the last readings woke set their commands first, so that a
+                # program's command is never a tick late because this loop ticked before it.
+                for _ in range(3):
+                    await asyncio.sleep(0)
                 await hw.clock.tick()
         finally:
             hw.drive.stop()

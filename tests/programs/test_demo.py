@@ -29,8 +29,28 @@ async def run_demo(tmp_path: Path, *args: str) -> tuple[int, str]:
 
 
 async def test_hello_team_demo_runs_on_processes(tmp_path: Path) -> None:
-    code, out = await run_demo(tmp_path, "--program", "hello_team")
+    world = str(ROOT / "worlds" / "search_rescue.toml")
+    code, out = await run_demo(tmp_path, "--program", "hello_team", "--world", world)
     assert code == 0, out
     assert "ernst: heard who=[moseley]" in out
     assert "step 1 (and): 2 messages for 2 members (bound 2)" in out
+    assert (tmp_path / "trajectories.png").stat().st_size > 1000
+
+
+async def test_search_and_rescue_with_three_robot_processes_moves_the_box(tmp_path: Path) -> None:
+    """The README's first command: world + 3 robot processes + the program, end to end."""
+    code, out = await run_demo(tmp_path, "--seed", "2")
+    assert code == 0, out
+    assert out.count(": done") == 3, out
+    moved = [line for line in out.splitlines() if line.startswith("box 'victim' moved")]
+    assert moved, out
+    nearer = float(moved[0].split("; ")[1].split(" m nearer")[0])
+    print(moved[0])
+    assert nearer >= 2.0  # the box went at least 2 m along its path, toward the goal
+    winners = {
+        line.split('"winner": "')[1].split('"')[0]
+        for line in out.splitlines()
+        if '"winner": "' in line
+    }
+    assert len(winners) == 1  # every member agreed on the finder
     assert (tmp_path / "trajectories.png").stat().st_size > 1000
