@@ -5,13 +5,15 @@ collective of a run is the same step on every member. Each step has a designated
 as the task runs: the first (by name) of the step's members that is alive. It is an ordinary
 member, not a server; if it dies, the next one takes over.
 
-OR (MOVER's ``distributed_or``). Every member starts the operation and asks the designated
-member for the decision (a long-poll call). The first member to finish claims the win; the
-designated member takes the first claim it receives — one place, one order, so all members agree
-on one winner even when several finish within the same millisecond — and answers every waiting
-member with the winner and its results. The others' operations are then cancelled (their
-``finally`` blocks run: motors stop). Messages per step: n-1 polls and their n-1 replies, plus one
-claim and its reply: 2n.
+OR (MOVER's ``distributed_or``). Every member starts the operation. The first member to finish
+claims the win from the designated member, which takes the first claim it receives — one place,
+one order, so all members agree on one winner even when several finish within the same
+millisecond — answers the claim, and announces the decision to the team in one broadcast. The
+others' operations are then cancelled (their ``finally`` blocks run: motors stop). A member
+that has not heard the decision within ``POLL_AFTER`` (a long step) asks the designated member
+for it and waits on that call, which also tells it when the designated member is lost.
+Messages per step: a claim and its reply, n-1 deliveries of the announcement, and two per
+member that had to ask: n+1 for a short step, up to 3n-1 for a long one.
 
 AND, designated variant (section 4.4): each member sends its result to the designated member and
 gets everybody's results in the reply, once all have finished: 2(n-1) messages.
@@ -46,6 +48,8 @@ log = logging.getLogger("mover.tasks")
 
 Policy = Literal["fail", "survivors"]
 _STEP_MEMORY = 512  # finished steps a designated member remembers (for late re-sends)
+DECIDED_TOPIC = "mover/decided"
+POLL_AFTER = 0.2  # seconds an OR member waits for the announced decision before polling
 
 
 @dataclass(frozen=True)
@@ -100,17 +104,23 @@ class Collectives:
         self.node = node
         self.policy = policy
         self._steps: dict[tuple[str, int], _Step] = {}
+        # OR decisions as announced by designated members (one broadcast per step)
+        self._heard: dict[tuple[str, int], asyncio.Future[list[Any]]] = {}
+        self._announcements = node.subscribe(DECIDED_TOPIC)
+        self._listener = asyncio.get_running_loop().create_task(self._listen())
         node.export(self.or_join, "mover.or_join")
         node.export(self.or_claim, "mover.or_claim")
         node.export(self.and_done, "mover.and_done")
         node.export(self.and_put, "mover.and_put")
         node.team.on_leave(self._member_left)
 
-    def step(self, run: str, step: int, members: Sequence[str]) -> _Step:
+    def step(self, run: str, step: int, members: Sequence[str], kind: str = "and") -> _Step:
         key = (run, step)
         state = self._steps.get(key)
         if state is None:
             state = self._steps[key] = _Step(frozenset(members))
+            if kind == "or":
+                state.decision.add_done_callback(lambda _: self._announce(run, step, state))
             state.lost = [m for m in members if m < self.node.name and m not in self.node.team]
             state.takeover = bool(state.lost)
             while len(self._steps) > _STEP_MEMORY:
@@ -120,6 +130,31 @@ class Collectives:
                 del self._steps[oldest]
         return state
 
+    def heard(self, run: str, step: int) -> asyncio.Future[list[Any]]:
+        """The decision of OR step ``(run, step)`` once announced (a future)."""
+        future = self._heard.get((run, step))
+        if future is None:
+            future = self._heard[(run, step)] = asyncio.get_running_loop().create_future()
+            while len(self._heard) > _STEP_MEMORY:
+                del self._heard[next(iter(self._heard))]
+        return future
+
+    async def _listen(self) -> None:
+        async for message in self._announcements:
+            data = message.data
+            if isinstance(data, list) and len(data) == 3 and isinstance(data[2], list):
+                future = self.heard(str(data[0]), int(data[1]))
+                if not future.done():
+                    future.set_result(data[2])
+
+    def _announce(self, run: str, step: int, state: _Step) -> None:
+        """Tell every member the decision: one broadcast, n-1 deliveries."""
+        decision = state.decision.result()
+        local = self.heard(run, step)
+        if not local.done():
+            local.set_result(decision)
+        self.node.broadcast_nowait(DECIDED_TOPIC, [run, step, decision], reliable=True)
+
     def _expected(self, state: _Step) -> set[str]:
         return {m for m in state.members if m in self.node.team}
 
@@ -127,7 +162,7 @@ class Collectives:
         self, run: str, step: int, member: str, members: list[str], known: list[Any] | None = None
     ) -> list[Any]:
         """A member waits for the decision (and tells what it knows after a takeover)."""
-        state = self.step(run, step, members)
+        state = self.step(run, step, members, "or")
         state.joined.add(member)
         if known is not None and not state.decision.done():
             state.decision.set_result(known)
@@ -138,7 +173,7 @@ class Collectives:
         self, run: str, step: int, member: str, members: list[str], result: Any
     ) -> list[Any]:
         """A member finished its operation: it wins unless someone claimed first."""
-        state = self.step(run, step, members)
+        state = self.step(run, step, members, "or")
         state.joined.add(member)
         if all(m != member for m, _ in state.claims):
             state.claims.append((member, result))
@@ -264,38 +299,60 @@ class TaskTeam:
         return await continuation(outcome) if continuation else outcome
 
     async def _or_decision(self, metrics: StepMetrics, op: asyncio.Future[Any]) -> list[Any]:
+        """Wait for the step's decision: claim it if ``op`` finishes first, else hear it.
+
+        The designated member announces each decision once (one broadcast); a member that has
+        not heard it within ``POLL_AFTER`` seconds (a long step, a subscription not yet known
+        to the designated member, a lost link) asks for it, and so does every member after the
+        designated member is lost.
+        """
+        heard = self.collectives.heard(self.run, metrics.step)
         known: list[Any] | None = None
+        poll: asyncio.Future[Any] | None = None
+        poll_at = time.monotonic() + POLL_AFTER
+        designated = await self._designated()
+        if designated != self.me:
+            metrics.messages += 1  # the designated member's announcement reaches this member
         while True:
-            designated = await self._designated()
             args = (self.run, metrics.step, self.me, self.members)
             try:
+                if heard.done():
+                    return heard.result()
+                if poll is not None and poll.done():
+                    decision: list[Any] = poll.result()  # raises _Retry if the poll failed
+                    return decision
                 if op.done() and not op.cancelled() and op.exception() is None:
                     metrics.finished = metrics.finished or time.perf_counter()
-                    decision: list[Any] = await self._ask(
+                    decision = await self._ask(
                         metrics, designated, "mover.or_claim", *args, op.result()
                     )
                     return decision
-                poll = asyncio.ensure_future(
-                    self._ask(metrics, designated, "mover.or_join", *args, known)
+                waiting: set[asyncio.Future[Any]] = {heard}
+                if not op.done():
+                    waiting.add(op)
+                if poll is not None:
+                    waiting.add(poll)
+                timeout = None if poll is not None else max(0.0, poll_at - time.monotonic())
+                done, _ = await asyncio.wait(
+                    waiting, timeout=timeout, return_when=asyncio.FIRST_COMPLETED
                 )
-                poll.add_done_callback(_quiet)
-                await asyncio.wait(
-                    {poll} if op.done() else {poll, op}, return_when=asyncio.FIRST_COMPLETED
-                )
-                if poll.done():
-                    decision = poll.result()
-                    return decision
-                if op.exception() is not None:
+                if not done and poll is None:
+                    poll = asyncio.ensure_future(
+                        self._ask(metrics, designated, "mover.or_join", *args, known)
+                    )
+                    poll.add_done_callback(_quiet)
+                elif op in done and op.exception() is not None:
                     log.warning(
                         "%s: the operation of step %d failed: %r",
                         self.me,
                         metrics.step,
                         op.exception(),
                     )
-                # Loop round to claim; the poll stays open and its answer is not waited for.
             except _Retry as retry:
                 known = retry.known or known
                 await self._recover(designated)
+                designated = await self._designated()
+                poll, poll_at = None, time.monotonic()  # ask the (new) designated member now
 
     async def distributed_and(
         self,
