@@ -59,7 +59,8 @@ def test_messages_carry_only_changes_and_merge() -> None:
     b.observe(heard_messages=[first])
     assert b.known[2, 2] == FREE
     assert b.known[0, 0] == OBSTACLE
-    assert b.regions == frozenset({0, 1})  # regions merge when in range
+    assert b.regions == frozenset({1})  # its own region stays first,
+    assert b.merged == frozenset({0})  # the region of the agent met is merged in
     assert b.peers[0].pos == a.pos
     # b heard a newcomer: its next message is its whole map, so a catches up
     seen_b = visible_cells(grid, (6, 6))
@@ -92,3 +93,28 @@ def test_agent_never_plans_into_a_known_obstacle() -> None:
         assert grid[r + dr, c + dc] == 0
         agent.observe(position=(r + dr, c + dc))
     assert not (agent.known[1:-1, 1:-1] == UNKNOWN).any()
+
+
+def test_cu_lvp_goals_stay_inside_the_agents_regions() -> None:
+    from sim_hw.maze import MazeWorld
+
+    maze = generate_maze(30, 0.85, np.random.default_rng(11), n_starts=6)
+    world = MazeWorld(maze, 6)
+    team = make_team("cu-lvp", maze.shape, list(world.positions), 4)
+    for _ in range(60):
+        for i, a in enumerate(team):
+            a.observe(seen_cells=world.sense(i), position=world.positions[i])
+        msgs = [msgpack.unpackb(msgpack.packb(a.outgoing_message())) for a in team]
+        for i, a in enumerate(team):
+            a.observe(heard_messages=[msgs[j] for j in world.neighbours(i)])
+            move = a.decide()
+            if a.goal is not None:
+                assert a.region_of[a.goal] in a.regions | a.merged
+                assert a.known.ravel()[a.goal] == UNKNOWN
+            world.move(i, move)
+
+
+def test_public_face() -> None:
+    import robots.explore as explore
+
+    assert all(hasattr(explore, name) for name in explore.__all__)

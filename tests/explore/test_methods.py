@@ -77,3 +77,17 @@ def test_runner_on_a_maze_file(tmp_path, capsys) -> None:
     bad = _parse("--maze", str(path), "--agents", "4", "--no-plots")
     assert bad.func(bad) == 2
     assert "3 starts" in capsys.readouterr()[1]
+
+
+@pytest.mark.parametrize(
+    ("run", "method"),
+    [(67, "cu-lvp"), (42, "cu-lvp"), (61, "nf"), (63, "cu-mnm"), (66, "cu-jgr"), (67, "cu-bso")],
+)
+def test_two_agents_meeting_in_corridors_do_not_livelock(run: int, method: str) -> None:
+    # Seeded mazes where two agents once met head-on and waited for, or danced around, each
+    # other until the round cap (experiment seed 2026, p = 0.85, 2 agents).
+    maze = generate_maze(30, 0.85, np.random.default_rng(np.random.SeedSequence(
+        [2026, 30, 850, run])), n_starts=20)
+    seed = np.random.SeedSequence([2026, 30, 850, run, 2, list(METHODS).index(method)])
+    res = run_trial(maze, 2, method, seed, max_rounds=1500)
+    assert res["complete"]

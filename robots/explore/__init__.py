@@ -1,0 +1,74 @@
+"""Distributed maze exploration: CU-LVP and its baselines (Linardakis et al.).
+
+Each agent is an :class:`ExplorerAgent` (its own map, region, and what it heard) with a
+:class:`Policy` that turns that knowledge into a move. The same objects run in-process
+(``programs/maze_experiment.py``) and, one per process, on a grid world:
+``observe(seen_cells, heard_messages)``, ``outgoing_message()`` (msgpack-able), ``decide()``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._agent import STAY, ExplorerAgent, Move, Peer, Policy
+from ._frontier import CULVP, CostUtilityBSO, CostUtilityJGR, CostUtilityMNM, NearestFrontier
+from ._grid import AGENT, FREE, OBSTACLE, UNKNOWN
+from ._hedac import Hedac, attracting_field
+from ._sensing import unexplored_in_view
+from ._voronoi import voronoi_partition
+
+#: Method name -> policy factory, in the order the paper lists them.
+METHODS = {
+    "cu-lvp": CULVP,
+    "nf": NearestFrontier,
+    "cu-mnm": CostUtilityMNM,
+    "cu-jgr": CostUtilityJGR,
+    "cu-bso": CostUtilityBSO,
+    "hedac": Hedac,
+}
+
+
+def make_policy(method: str) -> Policy:
+    """A fresh policy for ``method`` (one of :data:`METHODS`) with the paper's parameters."""
+    try:
+        return METHODS[method]()  # type: ignore[no-any-return]
+    except KeyError:
+        raise ValueError(f"unknown method {method!r}; choose from {', '.join(METHODS)}") from None
+
+
+def make_team(
+    method: str,
+    shape: tuple[int, int],
+    starts: list[tuple[int, int]],
+    seed: int | np.random.SeedSequence,
+) -> list[ExplorerAgent]:
+    """One agent per start cell, each with its own policy and an independent seeded stream."""
+    seqs = np.random.SeedSequence(seed).spawn(len(starts)) if isinstance(seed, int) \
+        else seed.spawn(len(starts))
+    return [ExplorerAgent(i, shape, starts, make_policy(method), np.random.default_rng(s))
+            for i, s in enumerate(seqs)]
+
+
+__all__ = [
+    "AGENT",
+    "CULVP",
+    "FREE",
+    "METHODS",
+    "OBSTACLE",
+    "STAY",
+    "UNKNOWN",
+    "CostUtilityBSO",
+    "CostUtilityJGR",
+    "CostUtilityMNM",
+    "ExplorerAgent",
+    "Hedac",
+    "Move",
+    "NearestFrontier",
+    "Peer",
+    "Policy",
+    "attracting_field",
+    "make_policy",
+    "make_team",
+    "unexplored_in_view",
+    "voronoi_partition",
+]

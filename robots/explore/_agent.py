@@ -1,0 +1,247 @@
+"""One exploring agent: its own map, what it hears, its region, its move (section III-A/B).
+
+The agent is a plain object with no I/O, so the same class runs in an in-process experiment
+and inside a robot process on a grid world. Per round the owner calls
+
+1. ``observe(seen_cells=..., position=...)`` with what the star sensor saw;
+2. ``outgoing_message()`` and broadcasts it (msgpack-able) to the agents within range;
+3. ``observe(heard_messages=[...])`` with the messages heard this round (possibly none);
+4. ``decide()`` and drives the returned move ``(d_row, d_col)``.
+
+No central map: an agent decides only from its own map and what it has heard. Messages carry
+only what changed since the agent's last message, except that when an agent hears a peer it did
+not hear the round before, its next message carries its whole map (the newcomer missed the
+deltas); a peer that stays in range has thus received everything the sender knows.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+import numpy as np
+
+from ._grid import FREE, OBSTACLE, UNKNOWN, passable_mask, path_to, wavefront
+from ._voronoi import voronoi_partition
+
+Move = tuple[int, int]
+STAY: Move = (0, 0)
+
+
+class Policy(Protocol):
+    """A decision method (CU-LVP or a baseline): the agent's state -> its move."""
+
+    name: str
+
+    def decide(self, agent: ExplorerAgent) -> Move:
+        """Choose this round's move for ``agent``."""
+        ...
+
+
+@dataclass(frozen=True)
+class Peer:
+    """What an agent heard from another this round: flat cell, goal, regions."""
+
+    pos: int
+    goal: int | None
+    regions: frozenset[int]
+
+
+class ExplorerAgent:
+    """An agent's knowledge (map, region, peers heard) and its decision, seeded.
+
+    ``starts`` are the whole team's start cells, known to every member at launch (as team
+    membership is); each agent derives the same Voronoi partition from them.
+    """
+
+    def __init__(
+        self,
+        agent_id: int,
+        shape: tuple[int, int],
+        starts: list[tuple[int, int]],
+        policy: Policy,
+        rng: np.random.Generator,
+    ) -> None:
+        self.id = agent_id
+        self.shape = (int(shape[0]), int(shape[1]))
+        self.width = self.shape[1]
+        self.policy = policy
+        self.rng = rng
+        self.known = np.full(self.shape, UNKNOWN, dtype=np.int8)
+        self.known[0, :] = self.known[-1, :] = OBSTACLE  # the border is walled (IV-A)
+        self.known[:, 0] = self.known[:, -1] = OBSTACLE
+        self._flat = self.known.ravel()  # a view: writes go to ``known``
+        self._border = self.known == OBSTACLE
+        self.pos = self._index(starts[agent_id])
+        # Section III-B: regions from the initial map, where all unknown space counts as free.
+        self.region_of = voronoi_partition(self.known != OBSTACLE, list(starts)).ravel()
+        self.regions: frozenset[int] = frozenset({agent_id})  # assigned: explored first
+        self.merged: frozenset[int] = frozenset()  # regions of agents met, explored next
+        self._in_region = self.region_of == agent_id
+        self._in_merged = np.zeros(self.region_of.shape, dtype=bool)
+        self.goal: int | None = None
+        self.peers: dict[int, Peer] = {}
+        self._fresh = np.zeros(self._flat.size, dtype=bool)
+        self._send_full = False
+        self._heard_before: set[int] = set()
+        self.stuck = 0
+        self._dtype = "<u2" if self._flat.size <= 0xFFFF else "<u4"
+
+    # -- coordinates -------------------------------------------------------------------------
+    def _index(self, rc: tuple[int, int]) -> int:
+        return int(rc[0]) * self.width + int(rc[1])
+
+    def cell(self, k: int) -> tuple[int, int]:
+        """``(row, col)`` of flat index ``k``."""
+        return divmod(int(k), self.width)
+
+    @property
+    def position(self) -> tuple[int, int]:
+        """The agent's cell."""
+        return self.cell(self.pos)
+
+    # -- sensing and hearing -----------------------------------------------------------------
+    def observe(
+        self,
+        seen_cells: list[tuple[int, int, int]] | None = None,
+        heard_messages: list[dict[str, Any]] | None = None,
+        position: tuple[int, int] | None = None,
+    ) -> None:
+        """Record sensed cells ``(row, col, value)``, the agent's cell, and heard messages.
+
+        Pass ``heard_messages`` (an empty list if nobody was heard) once per round: it replaces
+        the peers heard last round.
+        """
+        if position is not None:
+            new = self._index(position)
+            self.stuck = 0 if new != self.pos else self.stuck
+            self.pos = new
+        for r, c, v in seen_cells or ():
+            k = r * self.width + c
+            if self._flat[k] == UNKNOWN:
+                self._flat[k] = v
+                self._fresh[k] = True
+        if heard_messages is not None:
+            self._hear(heard_messages)
+
+    def _hear(self, messages: list[dict[str, Any]]) -> None:
+        peers: dict[int, Peer] = {}
+        merged = set(self.merged)
+        for msg in messages:
+            sender = int(msg["id"])
+            if sender == self.id:
+                continue
+            for key, value in (("free", FREE), ("obstacle", OBSTACLE)):
+                idx = np.frombuffer(msg[key], dtype=self._dtype).astype(np.intp)
+                new = idx[self._flat[idx] == UNKNOWN]
+                self._flat[new] = value
+                self._fresh[new] = True
+            goal = msg.get("goal")
+            peer_regions = frozenset(int(r) for r in msg["regions"])
+            peers[sender] = Peer(self._index(msg["pos"]),
+                                 None if goal is None else self._index(goal), peer_regions)
+            merged |= peer_regions  # section III-B: regions merge when agents are in range
+        if set(peers) - self._heard_before:
+            self._send_full = True  # a newcomer missed our earlier deltas
+        self._heard_before = set(peers)
+        self.peers = peers
+        merged -= self.regions
+        if merged != self.merged:
+            self.merged = frozenset(merged)
+            self._in_merged = np.isin(self.region_of, list(self.merged))
+
+    def outgoing_message(self) -> dict[str, Any]:
+        """This round's broadcast: position, goal, regions and the map cells that changed."""
+        mask = (self._flat != UNKNOWN) & ~self._border.ravel() if self._send_full else self._fresh
+        self._send_full = False
+        free = np.flatnonzero(mask & (self._flat == FREE)).astype(self._dtype)
+        obstacle = np.flatnonzero(mask & (self._flat == OBSTACLE)).astype(self._dtype)
+        self._fresh[:] = False
+        return {
+            "id": self.id,
+            "pos": list(self.position),
+            "goal": None if self.goal is None else list(self.cell(self.goal)),
+            "regions": sorted(self.regions),
+            "free": free.tobytes(),
+            "obstacle": obstacle.tobytes(),
+        }
+
+    # -- regions -----------------------------------------------------------------------------
+    def set_regions(self, regions: set[int] | frozenset[int]) -> None:
+        """Assign ``regions`` (Voronoi region ids) to this agent; forget merged ones."""
+        self.regions = frozenset(regions)
+        self._in_region = np.isin(self.region_of, list(self.regions))
+        self.merged = frozenset()
+        self._in_merged[:] = False
+
+    def candidates(self) -> np.ndarray:
+        """Flat mask of the cells where goals may lie: the unknown cells of the assigned
+        region, or, once it is explored, of the regions merged from agents met (section III-B:
+        "the primary focus remains on achieving complete coverage within the assigned
+        region")."""
+        unknown = self._flat == UNKNOWN
+        own = unknown & self._in_region
+        return own if own.any() else unknown & self._in_merged
+
+    def in_region(self) -> np.ndarray:
+        """Flat mask of the agent's assigned region."""
+        return self._in_region
+
+    def switch_region(self, exclude_current: bool = False) -> bool:
+        """Section III-B: once its region is explored, take the nearest region that still has
+        unknown cells, judged from the agent's own map. Returns whether one was found."""
+        targets = (self._flat == UNKNOWN) & (self.region_of >= 0)
+        if exclude_current:
+            targets &= ~(self._in_region | self._in_merged)
+        _, _, found = wavefront(passable_mask(self.known), self.pos, self.width,
+                                bytearray(targets.tobytes()), nearest_only=True)
+        if not found:
+            return False
+        self.set_regions({int(self.region_of[min(found)])})
+        self.goal = None
+        return True
+
+    # -- moving ------------------------------------------------------------------------------
+    def peer_cells(self) -> list[int]:
+        """Cells of the agents heard this round (the map's "agent" cells)."""
+        return [p.pos for p in self.peers.values()]
+
+    def senior_peer_cells(self) -> list[int]:
+        """Cells of the agents heard this round whose id is smaller (they have the way)."""
+        return [p.pos for pid, p in self.peers.items() if pid < self.id]
+
+    def step_towards(self, goal: int, passable: bytearray) -> Move | None:
+        """One move along a shortest path to ``goal`` over ``passable``; None if unreachable.
+
+        If an agent heard this round stands on the next cell, the agent waits (``STAY``) and
+        counts the round as blocked.
+        """
+        target = bytearray(len(passable))
+        target[goal] = 1
+        _, parent, found = wavefront(passable, self.pos, self.width, target, nearest_only=True)
+        if not found:
+            return None
+        path = path_to(parent, self.pos, goal)
+        if path and path[0] not in self.peer_cells():
+            return self.move_to(path[0])
+        self.stuck += 1
+        return STAY
+
+    def sidestep(self) -> Move:
+        """A random move to a known free neighbour that no heard agent occupies."""
+        taken = set(self.peer_cells())
+        options = [m for m in (self.pos - self.width, self.pos + self.width,
+                               self.pos - 1, self.pos + 1)
+                   if self._flat[m] == FREE and m not in taken]
+        if not options:
+            return STAY
+        return self.move_to(options[int(self.rng.integers(len(options)))])
+
+    def move_to(self, k: int) -> Move:
+        """The move onto the 4-neighbour cell ``k``."""
+        d = k - self.pos
+        return {-self.width: (-1, 0), self.width: (1, 0), -1: (0, -1), 1: (0, 1)}[d]
+
+    def decide(self) -> Move:
+        """This round's move, chosen by the agent's policy."""
+        return self.policy.decide(self)

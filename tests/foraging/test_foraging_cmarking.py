@@ -1,0 +1,119 @@
+"""C-marking agents (Simonin et al., Algorithm 4): trails are created, climbed and removed."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from robots.foraging import NO_COLOUR, TRAIL, CMarkingAgent, Neighbour, Perception, Task
+from sim_hw.grid import Grid, GridWorld, place_resources, random_obstacles
+from tests.foraging.test_foraging_marking import lemma_4_1_holds
+
+
+def agent(seed: int = 0, **kw: object) -> CMarkingAgent:
+    return CMarkingAgent(np.random.default_rng(seed), **kw)  # type: ignore[arg-type]
+
+
+def perception(value: int, colour: int, resource: int, *nbrs: tuple) -> Perception:
+    """Neighbours as (direction, value, colour, resource)."""
+    return Perception(value, colour, resource, False, tuple(Neighbour(*n, False) for n in nbrs))
+
+
+def test_loading_chooses_the_return_task() -> None:
+    a = agent()
+    act = a.step(perception(6, NO_COLOUR, 500, (0, 5, 0, 0), (1, 7, 0, 0)))
+    assert (act.load, act.colour, act.move, a.task) == (100, TRAIL, 0, Task.COLOUR)
+    b = agent()
+    act = b.step(perception(6, TRAIL, 500, (0, 5, TRAIL, 0), (1, 7, 0, 0)))
+    assert (act.load, act.colour, b.task) == (100, None, Task.RETURN)  # a trail is there
+    c = agent()
+    act = c.step(perception(6, TRAIL, 100, (0, 5, TRAIL, 0), (1, 7, 0, 0)))
+    assert (act.load, act.colour, act.move, c.task) == (100, NO_COLOUR, 0, Task.REMOVE)
+
+
+def test_colour_on_move_leaves_the_source_cell_alone() -> None:
+    a = agent(colour_source=False)
+    act = a.step(perception(6, NO_COLOUR, 500, (0, 5, 0, 0), (1, 7, 0, 0)))
+    assert (act.load, act.colour, a.task) == (100, None, Task.COLOUR)
+    assert a.step(perception(5, NO_COLOUR, 0, (0, 4, 0, 0))).colour == TRAIL  # the next cell
+
+
+def test_search_moves_to_resource_then_climbs_the_highest_trail_cell() -> None:
+    a = agent()
+    assert a.step(perception(4, 0, 0, (0, 5, TRAIL, 0), (1, 3, 0, 50))).move == 1
+    act = a.step(perception(4, 0, 0, (0, 5, TRAIL, 0), (1, 3, TRAIL, 0), (2, 6, TRAIL, 0)))
+    assert act.move == 2
+    assert a.came_from == 0  # the opposite of south
+    act = a.step(perception(6, TRAIL, 0, (0, 5, TRAIL, 0), (1, 7, TRAIL, 0)))
+    assert act.move == 1 and a.task == Task.SEARCH
+
+
+def test_dead_end_of_a_trail_is_removed() -> None:
+    a = agent()
+    a.came_from = 2
+    act = a.step(perception(9, TRAIL, 0, (2, 8, TRAIL, 0), (1, 10, 0, 0)))
+    assert (a.task, act.colour, act.move) == (Task.REMOVE, NO_COLOUR, 2)
+    literal = agent(remove_dead_ends=False)
+    literal.came_from = 2
+    literal.step(perception(9, TRAIL, 0, (2, 8, TRAIL, 0), (1, 10, 0, 0)))
+    assert literal.task == Task.SEARCH
+
+
+def test_previous_position_is_not_climbed_back_from_the_base() -> None:
+    a = agent()
+    a.task, a.came_from = Task.RETURN, 1  # came down the trail from the east
+    base = Perception(
+        0, 0, 0, True, (Neighbour(1, 1, TRAIL, 0, False), Neighbour(2, 1, 0, 0, False))
+    )
+    act = a.step(base)
+    assert act.unload and a.task == Task.SEARCH and act.move == 2  # explores instead
+    b = agent(forget_at_base=True)
+    b.task, b.came_from = Task.RETURN, 1
+    assert b.step(base).move == 1
+
+
+def trail_cells(world: GridWorld) -> set[tuple[int, int]]:
+    cols = world.colours_array()
+    return {(int(r), int(c)) for r, c in zip(*np.nonzero(cols == TRAIL), strict=True)}
+
+
+def test_trail_created_climbed_and_removed_when_source_exhausted() -> None:
+    grid = Grid(np.zeros((9, 9), dtype=bool))
+    base, source = (4, 4), (0, 1)
+    world = GridWorld(grid, base, {source: 300}, 1)
+    a = agent(3, forget_at_base=True)  # straight back up its own trail, to count the moves
+    # First trip: explore, find the source, colour the way back.
+    while world.carried[0] == 0:
+        world.step([a])
+    loaded = world.iteration
+    while world.delivered == 0:
+        world.step([a])
+    trail = trail_cells(world)
+    assert source in trail and base not in trail
+    assert len(trail) == world.iteration - loaded  # one cell coloured per step home
+    assert any(n in trail for n in grid.neighbours(base))
+    assert all(any(n in trail for n in grid.neighbours(c)) for c in trail)  # connected
+    # From the base the trail is climbed straight to the source: the unloading step already
+    # moved onto the first trail cell, then one move per trail cell left and one loading step.
+    start = world.iteration
+    while world.carried[0] == 0:
+        world.step([a])
+    assert world.iteration - start == len(trail)
+    assert a.task == Task.RETURN  # the source is on a trail: plain descent home
+    while world.delivered < 300:
+        world.step([a])
+    assert world.exhausted
+    assert trail_cells(world) == set()  # RETURN & REMOVE TRAIL erased it
+
+
+def test_team_forages_with_trails_and_keeps_lemma_4_1() -> None:
+    base = (15, 15)
+    grid = random_obstacles(31, 31, 0.30, 8, keep_free=(base,))
+    res = place_resources(grid, 8, 500, 9, exclude=(base,))
+    world = GridWorld(grid, base, res, 10)
+    agents = [CMarkingAgent(r) for r in np.random.default_rng(10).spawn(10)]
+    seen_trail = False
+    while not world.exhausted and world.iteration < 50_000:
+        world.step(agents)
+        seen_trail = seen_trail or bool(trail_cells(world))
+        assert lemma_4_1_holds(world.marks_array(), grid, base)  # trails leave the field intact
+    assert world.exhausted and seen_trail

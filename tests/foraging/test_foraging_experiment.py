@@ -1,0 +1,55 @@
+"""The experiment runner: registered as `mover experiment foraging`, seeded, JSON at the end."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import pytest
+
+from programs import foraging_experiment as fx
+
+
+def parse(argv: list[str]) -> argparse.Namespace:
+    parser = argparse.ArgumentParser()
+    fx.register(parser.add_subparsers(dest="experiment"))
+    return parser.parse_args(["foraging", *argv])
+
+
+def test_table2_json_and_plot(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    argv = ["--table", "2", "--agents", "1,2", "--runs", "3", "--seed", "5", "--json", "--quiet"]
+    args = parse([*argv, "--out", str(tmp_path)])
+    assert args.func is fx.run
+    assert args.func(args) == 0
+    out = capsys.readouterr().out
+    last = json.loads(out.strip().splitlines()[-1])
+    assert last["seed"] == 5 and set(last["table2"]) == {"1", "2"}
+    assert "Table 2" in out and "agent-steps/s" in out
+    assert (tmp_path / "table2.png").stat().st_size > 0
+    again = parse([*argv, "--out", str(tmp_path)])
+    again.func(again)
+    assert json.loads(capsys.readouterr().out.strip().splitlines()[-1]) == last  # seeded
+
+
+def test_figure9_small(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    args = parse(["--table", "ants", "--sizes", "12", "--runs", "1", "--json", "--quiet",
+                  "--out", str(tmp_path)])  # fmt: skip
+    assert args.func(args) == 0
+    last = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert set(last["fig9"]) >= {"cmarking", "ants"}
+    assert (tmp_path / "fig9.png").exists()
+
+
+def test_trial_is_a_pure_function_of_its_seeds() -> None:
+    a = fx.run_trial(fx.SETUP2, 3, "cmarking", (1, 2, 0), (1, 2, 0, 3, 0), 100_000)
+    b = fx.run_trial(fx.SETUP2, 3, "cmarking", (1, 2, 0), (1, 2, 0, 3, 0), 100_000)
+    assert a == b and a.finished
+
+
+def test_variants_reach_the_agents() -> None:
+    base = fx.run_trial(fx.SETUP2, 3, "cmarking", (1, 2, 0), (1, 2, 0, 3, 0), 100_000)
+    letter = fx.run_trial(
+        fx.SETUP2, 3, "cmarking", (1, 2, 0), (1, 2, 0, 3, 0), 100_000, colour_source=False
+    )
+    assert letter.finished and letter != base
