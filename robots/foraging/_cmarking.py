@@ -17,8 +17,8 @@ Choices the paper leaves open, taken here:
   another source's trail passes through it and nearly every loader recolours its way home,
   which repairs broken trails. Measured (seed 2007): the default gives Tables 1 and 2 within
   15 % (one agent excepted); the letter makes Setup 1 and 2 about a third faster than the paper
-  (40 agents: 1504 vs 2263; 1 agent in Setup 2: 1233 vs 1790) but Setup 3 twice as fast as the
-  default (50×50: 1407 vs about 2700; the paper has 805);
+  (40 agents: 1504 vs 2263; 1 agent in Setup 2: 1225 vs 1790) but Setup 3 twice as fast as the
+  default (50×50: 1407 vs 2859; the paper has 805);
 * RETURN & REMOVE TRAIL follows the trail-coloured new neighbour of least value; when no such
   neighbour is left (the trail ends, or was already erased) it finishes as a plain descent;
 * an agent that arrives in a resource cell already emptied by another simply goes on searching;
