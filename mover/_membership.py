@@ -26,6 +26,7 @@ if TYPE_CHECKING:
     from ._node import Node
 
 log = logging.getLogger("mover.team")
+_HELLO_RETRIES = 8  # unanswered hellos asked again, 0.2 s to 3 s apart
 
 
 @dataclass(frozen=True)
@@ -159,10 +160,12 @@ class Membership:
             return
         self._ask_hello(name)
 
-    def _ask_hello(self, name: str) -> None:
+    def _ask_hello(self, name: str, attempt: int = 0) -> None:
         node = self._node
+        if node._session is None or name not in self._tokens or name in self._members:
+            return
         challenge = os.urandom(16)
-        state: dict[str, Any] = {"ok": False}
+        state: dict[str, Any] = {"ok": False, "refused": False}
 
         def on_reply(reply: Any) -> None:
             if reply.ok is None:
@@ -176,6 +179,7 @@ class Membership:
                     name, str(p["kind"]), float(p["started"]), int(p["pid"]), str(p["host"])
                 )
             except (WireError, AttributeError, KeyError, TypeError, ValueError) as exc:
+                state["refused"] = True
                 node._refusal_log.warn(name, f"hello from {name!r} refused: {exc}")
                 return
             state["ok"] = True
@@ -183,7 +187,13 @@ class Membership:
                 self._join(info)
 
         def on_done(_: Any) -> None:
-            if not state["ok"] and name in self._tokens:
+            if state["ok"] or name not in self._tokens:
+                return
+            if not state["refused"] and attempt < _HELLO_RETRIES:
+                # No answer (an overloaded machine, a link still coming up): ask again later.
+                delay = min(0.2 * 2**attempt, 3.0)
+                asyncio.get_running_loop().call_later(delay, self._ask_hello, name, attempt + 1)
+            else:
                 log.warning(
                     "%s: %r holds a liveliness token but is not a verified member of team %r",
                     node.name,
