@@ -13,7 +13,7 @@ import numpy as np
 
 from ._agent import STAY, ExplorerAgent, Move
 from ._grid import passable_mask, path_to, wavefront
-from ._sensing import unexplored_in_view
+from ._sensing import unexplored_in_view, unexplored_seen_from
 
 
 def _norm(values: list[float]) -> list[float]:
@@ -202,10 +202,15 @@ class CULVP(FrontierPolicy):
         found.sort()
         agents = [agent.pos, *agent.peer_cells()]
         mnm = [float(sum(_manhattan(f, a, agent.width) for a in agents)) for f in found]
-        unex = unexplored_in_view(agent.known, self.reach).ravel()
-        jgr = []
-        for f in found:
-            path = path_to(parent, agent.pos, f)
-            jgr.append(float(unex[agent.pos] + sum(unex[x] for x in path)))
+        flat = agent.known.ravel().tolist()
+        seen: dict[int, int] = {}
+
+        def unex(x: int) -> int:
+            if x not in seen:
+                seen[x] = unexplored_seen_from(flat, x, agent.width, self.reach)
+            return seen[x]
+
+        jgr = [float(unex(agent.pos) + sum(unex(x) for x in path_to(parent, agent.pos, f)))
+               for f in found]
         score = [a + self.lam * b for a, b in zip(_norm(mnm), _norm(jgr), strict=True)]
         return found[int(np.argmax(score))]

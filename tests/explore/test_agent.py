@@ -118,3 +118,16 @@ def test_public_face() -> None:
     import robots.explore as explore
 
     assert all(hasattr(explore, name) for name in explore.__all__)
+
+
+def test_unexplored_seen_from_matches_the_array_version() -> None:
+    from robots.explore._sensing import unexplored_seen_from
+
+    rng = np.random.default_rng(2)
+    known = rng.choice([UNKNOWN, FREE, OBSTACLE], size=(12, 12)).astype(np.int8)
+    known[0], known[-1], known[:, 0], known[:, -1] = OBSTACLE, OBSTACLE, OBSTACLE, OBSTACLE
+    full = unexplored_in_view(known)
+    flat = known.ravel().tolist()
+    for r in range(1, 11):
+        for c in range(1, 11):
+            assert unexplored_seen_from(flat, r * 12 + c, 12) == full[r, c]
