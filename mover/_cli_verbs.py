@@ -45,18 +45,9 @@ def _team_options(p: argparse.ArgumentParser) -> None:
 
 def _open(args: argparse.Namespace) -> tuple[Team, NodeConfig]:
     try:
-        team = Team.from_env(args.team)
-        config = NodeConfig.from_env()
+        return Team.from_env(args.team), NodeConfig.from_env(args.connect or ())
     except ValueError as exc:
         raise UsageError(str(exc)) from None
-    if args.connect:
-        config = NodeConfig(
-            mode=config.mode,
-            listen=config.listen,
-            connect=config.connect + tuple(args.connect),
-            overrides=config.overrides,
-        )
-    return team, config
 
 
 # -- ps -------------------------------------------------------------------------------------------

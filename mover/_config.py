@@ -16,6 +16,7 @@ import json
 import os
 import secrets
 import socket
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -85,8 +86,11 @@ class NodeConfig:
     overrides: dict[str, Any] = field(default_factory=dict)
 
     @classmethod
-    def from_env(cls) -> NodeConfig:
-        """Settings from ``MOVER_*`` environment variables (see the module docstring)."""
+    def from_env(cls, connect: Sequence[str] = ()) -> NodeConfig:
+        """Settings from ``MOVER_*`` environment variables (see the module docstring).
+
+        ``connect`` adds endpoints to those of ``MOVER_CONNECT`` (a command's ``--connect``).
+        """
         env = os.environ
 
         def endpoints(name: str) -> tuple[str, ...] | None:
@@ -103,7 +107,7 @@ class NodeConfig:
         return cls(
             mode=mode,
             listen=listen,
-            connect=endpoints("MOVER_CONNECT") or (),
+            connect=(endpoints("MOVER_CONNECT") or ()) + tuple(connect),
             overrides=overrides,
         )
 

@@ -26,8 +26,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         default="sim",
         help="hardware backend: sim (world process over zenoh), none (workstation)",
     )
-    p.add_argument("--world", default=None,
-                   help="name of the world process (sim: 'world', grid: 'gridworld' by default)")
+    p.add_argument(
+        "--world",
+        default=None,
+        help="name of the world process (sim: 'world', grid: 'gridworld' by default)",
+    )
     p.add_argument("--spec", metavar="JSON", help="the robot's body and devices, as JSON")
     p.add_argument(
         "--team-file",
@@ -79,16 +82,9 @@ def run(args: argparse.Namespace) -> int:
             raise UsageError(f"--spec is not JSON: {exc.msg}") from None
     try:
         team = Team.from_env(args.team)
-        config = NodeConfig.from_env()
+        config = NodeConfig.from_env(args.connect or ())
     except ValueError as exc:
         raise UsageError(str(exc)) from None
-    if args.connect:
-        config = NodeConfig(
-            mode=config.mode,
-            listen=config.listen,
-            connect=config.connect + tuple(args.connect),
-            overrides=config.overrides,
-        )
     kind = args.kind or entry.get("kind", "robot")
     options: dict[str, Any] = {}
     if args.hardware == "sim":
