@@ -244,6 +244,9 @@ class TaskTeam:
 
     ``members`` must be the same list on every member; ``run`` names the run (the same on every
     member). ``stall_timeout`` bounds how long a step waits for lost links to come back.
+    A node serves collectives through one :class:`Collectives` (it exports fixed procedure
+    names): when a node takes part in several runs, pass the same ``collectives`` to each
+    (``ProgramHost`` does); without it, a new one is made and replaces the previous one.
     """
 
     def __init__(
