@@ -8,12 +8,12 @@ member, not a server; if it dies, the next one takes over.
 OR (MOVER's ``distributed_or``). Every member starts the operation. The first member to finish
 claims the win from the designated member, which takes the first claim it receives — one place,
 one order, so all members agree on one winner even when several finish within the same
-millisecond — answers the claim, and announces the decision to the team in one broadcast. The
-others' operations are then cancelled (their ``finally`` blocks run: motors stop). A member
-that has not heard the decision within ``POLL_AFTER`` (a long step) asks the designated member
-for it and waits on that call, which also tells it when the designated member is lost.
-Messages per step: a claim and its reply, n-1 deliveries of the announcement, and two per
-member that had to ask: n+1 for a short step, up to 3n-1 for a long one.
+millisecond — and answers the claim. A member that has not heard the decision within
+``POLL_AFTER`` (a long step) asks the designated member for it and waits on that call, which
+also tells it when the designated member is lost. Members that did not ask get the decision in
+one broadcast. The others' operations are then cancelled (their ``finally`` blocks run: motors
+stop). Messages per step: n+1 for a short step (a claim, its answer, n-1 deliveries of the
+announcement), 2n for a long one (n-1 questions and answers, the claim and its answer).
 
 AND, designated variant (section 4.4): each member sends its result to the designated member and
 gets everybody's results in the reply, once all have finished: 2(n-1) messages.
@@ -95,6 +95,7 @@ class _Step:
     )
     takeover: bool = False  # this member took over from a designated member that is gone
     lost: list[str] = field(default_factory=list)  # members already gone when it took over
+    announced: int = 0  # deliveries of the OR decision's broadcast (n-1, or 0 if none was sent)
 
 
 class Collectives:
@@ -148,12 +149,20 @@ class Collectives:
                     future.set_result(data[2])
 
     def _announce(self, run: str, step: int, state: _Step) -> None:
-        """Tell every member the decision: one broadcast, n-1 deliveries."""
+        """Tell the members the decision: one broadcast, unless every one of them has asked."""
         decision = state.decision.result()
         local = self.heard(run, step)
         if not local.done():
             local.set_result(decision)
-        self.node.broadcast_nowait(DECIDED_TOPIC, [run, step, decision], reliable=True)
+        others = state.members - {self.node.name}
+        if not others <= state.joined:  # those who asked (or claimed) get it in their answer
+            self.node.broadcast_nowait(DECIDED_TOPIC, [run, step, decision], reliable=True)
+            state.announced = len(others)
+
+    def announced(self, run: str, step: int) -> int:
+        """How many deliveries the announcement of OR step ``(run, step)`` made from here."""
+        state = self._steps.get((run, step))
+        return state.announced if state is not None else 0
 
     def _expected(self, state: _Step) -> set[str]:
         return {m for m in state.members if m in self.node.team}
@@ -310,12 +319,23 @@ class TaskTeam:
         designated member is lost.
         """
         heard = self.collectives.heard(self.run, metrics.step)
+        designated = await self._designated()
+        try:
+            return await self._or_wait(metrics, op, heard, designated)
+        finally:
+            # The designated member counts its announcement's deliveries (n-1, or none).
+            metrics.messages += self.collectives.announced(self.run, metrics.step)
+
+    async def _or_wait(
+        self,
+        metrics: StepMetrics,
+        op: asyncio.Future[Any],
+        heard: asyncio.Future[list[Any]],
+        designated: str,
+    ) -> list[Any]:
         known: list[Any] | None = None
         poll: asyncio.Future[Any] | None = None
         poll_at = time.monotonic() + POLL_AFTER
-        designated = await self._designated()
-        if designated != self.me:
-            metrics.messages += 1  # the designated member's announcement reaches this member
         while True:
             args = (self.run, metrics.step, self.me, self.members)
             try:

@@ -252,7 +252,7 @@ def _report(
             entry[1] += st["messages"]
     n = len(outcomes)
     for step, (kind, msgs) in sorted(steps.items()):
-        bound = 3 * n - 1 if kind == "or" else (2 * (n - 1) if kind == "and" else 2 * n * (n - 1))
+        bound = 2 * n if kind == "or" else (2 * (n - 1) if kind == "and" else 2 * n * (n - 1))
         print(f"step {step} ({kind}): {msgs} messages for {n} members (bound {bound})")
     for bid, track in boxes.items():
         if len(track) >= 2:

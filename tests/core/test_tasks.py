@@ -140,3 +140,17 @@ async def test_a_member_leaving_during_and_fails_the_step_or_is_survived(
     else:
         outs = [await asyncio.wait_for(task, 1.0) for task in tasks[:3]]
         assert outs == [{"n0": "n0", "n1": "n1", "n2": "n2"}] * 3
+
+
+async def test_a_long_or_step_costs_2n_messages(nodes: list[Node]) -> None:
+    """Members that ask for the decision get it in the answer: no announcement is sent."""
+    ts = teams(nodes)
+
+    async def op(t: TaskTeam) -> str:
+        await asyncio.sleep(0.5 if t.me == "n3" else 5.0)  # longer than POLL_AFTER
+        return t.me
+
+    outs = await asyncio.gather(*(t.distributed_or(lambda t=t: op(t)) for t in ts))
+    assert {o.winner for o in outs} == {"n3"}
+    total = sum(t.metrics[0].messages for t in ts)
+    assert total == 2 * len(nodes)  # n-1 polls and answers, the claim and its answer
