@@ -96,6 +96,7 @@ class _Step:
     takeover: bool = False  # this member took over from a designated member that is gone
     lost: list[str] = field(default_factory=list)  # members already gone when it took over
     announced: int = 0  # deliveries of the OR decision's broadcast (n-1, or 0 if none was sent)
+    told: bool = False  # the OR decision was announced (or needed no announcement)
 
 
 class Collectives:
@@ -150,6 +151,9 @@ class Collectives:
 
     def _announce(self, run: str, step: int, state: _Step) -> None:
         """Tell the members the decision: one broadcast, unless every one of them has asked."""
+        if state.told:
+            return
+        state.told = True
         decision = state.decision.result()
         local = self.heard(run, step)
         if not local.done():
@@ -162,7 +166,11 @@ class Collectives:
     def announced(self, run: str, step: int) -> int:
         """How many deliveries the announcement of OR step ``(run, step)`` made from here."""
         state = self._steps.get((run, step))
-        return state.announced if state is not None else 0
+        if state is None:
+            return 0
+        if state.decision.done():
+            self._announce(run, step, state)  # now, if its callback has not run yet
+        return state.announced
 
     def _expected(self, state: _Step) -> set[str]:
         return {m for m in state.members if m in self.node.team}
