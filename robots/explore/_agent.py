@@ -73,6 +73,11 @@ class ExplorerAgent:
         self._flat = self.known.ravel()  # a view: writes go to ``known``
         self._border = self.known == OBSTACLE
         self.pos = self._index(starts[agent_id])
+        # CU-LVP chooses regions to help with by an estimate of the work left in them (see
+        # ``switch_region``); the baselines keep the plain rule.
+        self._estimate = getattr(policy, "region_choice", "nearest") == "estimate"
+        self._round = 0  # rounds heard so far (``observe(heard_messages=...)`` calls)
+        self._last_heard = np.zeros(len(starts))  # round an agent holding region r was heard
         # Section III-B: regions from the initial map, where all unknown space counts as free.
         self.region_of = voronoi_partition(self.known != OBSTACLE, list(starts)).ravel()
         self.regions: frozenset[int] = frozenset({agent_id})  # assigned: explored first
@@ -127,6 +132,7 @@ class ExplorerAgent:
     def _hear(self, messages: list[dict[str, Any]]) -> None:
         peers: dict[int, Peer] = {}
         merged = set(self.merged)
+        self._round += 1
         for msg in messages:
             sender = int(msg["id"])
             if sender == self.id:
@@ -140,6 +146,8 @@ class ExplorerAgent:
             peer_regions = frozenset(int(r) for r in msg["regions"])
             peers[sender] = Peer(self._index(msg["pos"]),
                                  None if goal is None else self._index(goal), peer_regions)
+            for r in peer_regions:
+                self._last_heard[r] = self._round
             merged |= peer_regions  # section III-B: regions merge when agents are in range
         if set(peers) - self._heard_before:
             self._send_full = True  # a newcomer missed our earlier deltas
@@ -178,9 +186,12 @@ class ExplorerAgent:
         """Flat mask of the cells where goals may lie: the unknown cells of the assigned
         region, or, once it is explored, of the regions merged from agents met (section III-B:
         "the primary focus remains on achieving complete coverage within the assigned
-        region")."""
+        region"). With ``region_choice = "estimate"`` (CU-LVP) only the assigned region: once
+        it is explored, ``switch_region`` picks the next by the work estimated left in it."""
         unknown = self._flat == UNKNOWN
         own = unknown & self._in_region
+        if self._estimate:
+            return own
         return own if own.any() else unknown & self._in_merged
 
     def in_region(self) -> np.ndarray:
@@ -189,15 +200,49 @@ class ExplorerAgent:
 
     def switch_region(self, exclude_current: bool = False) -> bool:
         """Section III-B: once its region is explored, take the nearest region that still has
-        unknown cells, judged from the agent's own map. Returns whether one was found."""
+        unknown cells, judged from the agent's own map. Returns whether one was found.
+
+        With ``region_choice = "estimate"`` (CU-LVP) the agent instead takes the region with
+        the most work it estimates left when it would arrive: the region's unknown cells on its
+        own map, less ``STALE_RATE`` cells for every round since it last heard an agent holding
+        that region (that agent has been exploring it since; never heard: since the start),
+        less ``DIST_RATE`` cells per round of travel. Helpers thus go where nobody was heard
+        working lately rather than to the nearest region, which a neighbour has often explored
+        already; ties go to the nearer region."""
         targets = (self._flat == UNKNOWN) & (self.region_of >= 0)
         if exclude_current:
             targets &= ~(self._in_region | self._in_merged)
+        if self._estimate:
+            return self._switch_by_estimate(targets)
         _, _, found = wavefront(passable_mask(self.known), self.pos, self.width,
                                 bytearray(targets.tobytes()), nearest_only=True)
         if not found:
             return False
         self.set_regions({int(self.region_of[min(found)])})
+        self.goal = None
+        return True
+
+    STALE_RATE = 4.0  # cells an agent is assumed to explore per round in its region
+    DIST_RATE = 8.0  # extra cells of estimated work a round of travel costs
+
+    def _switch_by_estimate(self, targets: np.ndarray) -> bool:
+        dist, _, found = wavefront(passable_mask(self.known), self.pos, self.width,
+                                   bytearray(targets.tobytes()))
+        if not found:
+            return False
+        cells = np.array(found)
+        region = self.region_of[cells]
+        away = np.array(dist)[cells]
+        best: tuple[tuple[float, int], int] | None = None
+        for r in np.unique(region):
+            here = region == r
+            d = int(away[here].min())
+            left = (int(here.sum()) - self.STALE_RATE * (self._round + d - self._last_heard[r])
+                    - self.DIST_RATE * d)
+            if best is None or (left, -d) > best[0]:
+                best = ((left, -d), int(r))
+        assert best is not None
+        self.set_regions({best[1]})
         self.goal = None
         return True
 

@@ -177,6 +177,7 @@ class CULVP(FrontierPolicy):
     """
 
     name = "cu-lvp"
+    region_choice = "estimate"  # see ExplorerAgent.switch_region
 
     def __init__(self, lam: float = 0.2, reach: int = 2) -> None:
         self.lam = lam
