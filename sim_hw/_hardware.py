@@ -281,6 +281,33 @@ async def in_process(server: Any, robot_id: str, spec: dict[str, Any] | None = N
     return SimHardware(robot_id, joined["spec"], joined["readings"], exchange).hardware()
 
 
+def world_caller(
+    node: Any, world: str, call_timeout: float
+) -> Callable[..., Awaitable[Any]]:
+    """``call(procedure, *args)`` on the world process, asked again while it looks lost.
+
+    The world may look lost for a moment when the machine is overloaded (a missed lease);
+    its calls (join, step) are idempotent, so wait for it to be back and ask again, until
+    ``call_timeout`` seconds have passed.
+    """
+    from mover import RobotLost, UnknownRobot
+
+    async def call(procedure: str, *args: Any) -> Any:
+        deadline = time.monotonic() + call_timeout
+        while True:
+            left = deadline - time.monotonic()
+            if world not in node.team:
+                await node.team.wait_for([world], timeout=max(left, 0.1))
+            try:
+                return await node.call(world, procedure, *args, timeout=max(left, 0.1))
+            except (RobotLost, UnknownRobot):
+                if time.monotonic() >= deadline:
+                    raise
+                await asyncio.sleep(0.05)
+
+    return call
+
+
 async def remote(
     node: Any,
     robot_id: str,
@@ -295,23 +322,7 @@ async def remote(
     must outlast the world's own drop timeout, since in lock-step a reply waits for every robot.
     The robot's id must be its node's name: the world drops the robot when that member leaves.
     """
-    from mover import RobotLost, UnknownRobot
-
-    async def call(procedure: str, *args: Any) -> Any:
-        # The world may look lost for a moment when the machine is overloaded (a missed
-        # lease); join and step are idempotent, so wait for it to be back and ask again.
-        deadline = time.monotonic() + call_timeout
-        while True:
-            left = deadline - time.monotonic()
-            if world not in node.team:
-                await node.team.wait_for([world], timeout=max(left, 0.1))
-            try:
-                return await node.call(world, procedure, *args, timeout=max(left, 0.1))
-            except (RobotLost, UnknownRobot):
-                if time.monotonic() >= deadline:
-                    raise
-                await asyncio.sleep(0.05)
-
+    call = world_caller(node, world, call_timeout)
     joined = await call("join", robot_id, spec or {})
 
     async def exchange(tick: int, command: Command) -> Readings:

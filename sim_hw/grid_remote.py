@@ -14,7 +14,6 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import contextvars
-import time
 from collections.abc import AsyncIterator, Awaitable, Callable
 from typing import Any
 
@@ -242,21 +241,9 @@ async def connect(node: Any, robot_id: str, spec: dict[str, Any] | None = None, 
     perception``. ``call_timeout`` must outlast the world's drop timeout. The robot's id must
     be its node's name: the world drops the robot when that member leaves the team.
     """
-    from mover import RobotLost, UnknownRobot
+    from sim_hw._hardware import world_caller
 
-    async def call(procedure: str, *args: Any) -> Any:
-        # join and step are idempotent: if the world looks lost for a moment, ask again
-        deadline = time.monotonic() + call_timeout
-        while True:
-            left = deadline - time.monotonic()
-            await node.team.wait_for([world], timeout=max(left, 0.1))
-            try:
-                return await node.call(world, procedure, *args, timeout=max(left, 0.1))
-            except (RobotLost, UnknownRobot):
-                if time.monotonic() >= deadline:
-                    raise
-                await asyncio.sleep(0.05)
-
+    call = world_caller(node, world, call_timeout)
     joined = await call("join", robot_id, spec or {})
 
     async def exchange(round: int, action: dict[str, Any]) -> dict[str, Any]:
