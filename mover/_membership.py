@@ -111,6 +111,23 @@ class Membership:
         """Call ``callback(name)`` on the loop whenever a member leaves."""
         self._on_leave.append(callback)
 
+    def on_gone(self, callback: Callable[[str], None], grace: float = 1.0) -> None:
+        """Call ``callback(name)`` when a member left and has not come back within ``grace`` s.
+
+        For giving up what a member held (its calls, its body in a world): a link that flaps
+        makes a member leave and join again within moments, and it should lose nothing.
+        """
+        loop = asyncio.get_running_loop()
+
+        def later(name: str) -> None:
+            if name not in self._members:
+                callback(name)
+
+        def left(name: str) -> None:
+            loop.call_later(grace, later, name)
+
+        self._on_leave.append(left)
+
     # -- driven by the node ---------------------------------------------------------------------
 
     async def _wait_change(self) -> None:

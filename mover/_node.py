@@ -122,6 +122,7 @@ class Node:
         self._session = await run_blocking(lambda: zenoh.open(conf))
         team, portal, session = self.team_config.name, self._portal, self._session
         self.team.on_leave(self._member_left)
+        self.team.on_gone(self._server.cancel)  # a caller gone for good: stop its calls
         self._declared += [
             session.declare_queryable(
                 _keys.rpc(team, self.name), portal.callback(self._server.on_query), complete=True
@@ -356,7 +357,6 @@ class Node:
 
     def _member_left(self, name: str) -> None:
         self._client.robot_left(name)
-        self._server.cancel(name)
         self.radio.forget(name)
 
 

@@ -35,7 +35,8 @@ def serve_world(node: Any, server: WorldServer, *, state_topic: str = STATE_TOPI
     node.export(leave, name="leave")
     # a robot process that dies is seen leaving the team within milliseconds (its liveliness
     # token goes); the lock-step timeout still catches one that hangs
-    node.team.on_leave(lambda name: server.drop(name, "left the team"))
+    # on_gone: a member whose link flaps (leaves and joins again within a second) keeps its body
+    node.team.on_gone(lambda name: server.drop(name, "left the team"))
     if server.on_snapshot is None and server.snapshot_every:
         send = getattr(node, "broadcast_nowait", None) or node.broadcast
         server.on_snapshot = lambda snap: send(state_topic, snap)

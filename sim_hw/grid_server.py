@@ -281,8 +281,11 @@ class GridServer:
         """It is ``name``'s turn: its perception is ready; answer its previous action."""
         waiter = self._waiters.get(name)
         pending = self._actions.get(name)
-        if waiter is None or waiter.done() or (pending is not None
-                                                and pending["_round"] == self.round):
+        if (
+            waiter is None
+            or waiter.done()
+            or (pending is not None and pending["_round"] == self.round)
+        ):
             return
         bot = self.robots[name]
         self._sense(bot)
@@ -355,8 +358,9 @@ class GridServer:
             self._sense_all()
         for name, future in admitted:
             if not future.done() and name in self.robots:
-                future.set_result({"spec": self._spec_of(self.robots[name]),
-                                   "readings": self._readings[name]})
+                future.set_result(
+                    {"spec": self._spec_of(self.robots[name]), "readings": self._readings[name]}
+                )
 
     def _place(self, name: str, spec: dict[str, Any], free_starts: list[int]) -> _Bot:
         if spec.get("start") is not None:
@@ -374,24 +378,35 @@ class GridServer:
         return _Bot(name, start, start, bool(spec.get("eight", False)), view)
 
     def _spec_of(self, bot: _Bot) -> dict[str, Any]:
-        return {"view": bot.view, "eight": bot.eight,
-                "radio": self.radio if self.radio is not None else math.inf,
-                "metric": self.metric}
+        return {
+            "view": bot.view,
+            "eight": bot.eight,
+            "radio": self.radio if self.radio is not None else math.inf,
+            "metric": self.metric,
+        }
 
     def _expire(self) -> None:
         self._deadline = None
         if self.turns == "sequential":
             todo = [n for n in sorted(self.robots) if n not in self._acted]
             if todo and todo[0] not in self._actions:
-                log.warning("robot %s did not take its turn in round %d within %.1f s: "
-                            "dropped", todo[0], self.round, self.timeout)
+                log.warning(
+                    "robot %s did not take its turn in round %d within %.1f s: dropped",
+                    todo[0],
+                    self.round,
+                    self.timeout,
+                )
                 self.dropped.append(todo[0])
                 self._remove(todo[0])
             self._pump()
             return
         for name in sorted(set(self.robots) - set(self._actions)):
-            log.warning("robot %s sent no action for round %d within %.1f s: dropped",
-                        name, self.round, self.timeout)
+            log.warning(
+                "robot %s sent no action for round %d within %.1f s: dropped",
+                name,
+                self.round,
+                self.timeout,
+            )
             self.dropped.append(name)
             self._remove(name)
         self._maybe_step()
@@ -432,8 +447,17 @@ class GridServer:
                 continue
             j = grid.index(cell)
             state = OCCUPIED if j in occupied else FREE
-            around.append([d, state, w.marks[j], w.colours[j], w.resources[j], j == w.base,
-                           float(ph[j]) if ph is not None else 0.0])
+            around.append(
+                [
+                    d,
+                    state,
+                    w.marks[j],
+                    w.colours[j],
+                    w.resources[j],
+                    j == w.base,
+                    float(ph[j]) if ph is not None else 0.0,
+                ]
+            )
         rays = []
         if bot.view > 0:
             for rr, cc, v in visible_cells(self.cells, (r, col), bot.view):
@@ -443,8 +467,13 @@ class GridServer:
         norm = math.hypot(br - r, bc - col)
         self._readings[bot.name] = {
             "round": self.round,
-            "here": [w.marks[c], w.colours[c], w.resources[c], c == w.base,
-                     float(ph[c]) if ph is not None else 0.0],
+            "here": [
+                w.marks[c],
+                w.colours[c],
+                w.resources[c],
+                c == w.base,
+                float(ph[c]) if ph is not None else 0.0,
+            ],
             "around": around,
             "rays": rays,
             "home": [(br - r) / norm, (bc - col) / norm] if norm else [0.0, 0.0],
@@ -463,8 +492,11 @@ class GridServer:
             if other == name:
                 continue
             r, c = self.grid.cell(bot.cell)
-            d = abs(r - r0) + abs(c - c0) if self.metric == "manhattan" else math.hypot(
-                r - r0, c - c0)
+            d = (
+                abs(r - r0) + abs(c - c0)
+                if self.metric == "manhattan"
+                else math.hypot(r - r0, c - c0)
+            )
             if d <= self.radio:
                 out.append(other)
         return out
@@ -491,8 +523,10 @@ class GridServer:
         w, grid = self.world, self.grid
         robots = {b.cell for b in self.robots.values()}
         seen = self._seen.ravel()
-        lines = [f"round {self.round}  remaining {w.remaining}  delivered {w.delivered}  "
-                 f"explored {int((self._target & self._seen).sum())}/{int(self._target.sum())}"]
+        lines = [
+            f"round {self.round}  remaining {w.remaining}  delivered {w.delivered}  "
+            f"explored {int((self._target & self._seen).sum())}/{int(self._target.sum())}"
+        ]
         for r in range(grid.height):
             row = []
             for c in range(grid.width):
@@ -515,7 +549,7 @@ class GridServer:
             lines.append("".join(row))
         lines.append("values:")
         for r in range(grid.height):
-            vals = w.marks[r * grid.width:(r + 1) * grid.width]
+            vals = w.marks[r * grid.width : (r + 1) * grid.width]
             lines.append(" ".join("-" if v < 0 else str(v) for v in vals))
         return "\n".join(lines) + "\n"
 
@@ -585,4 +619,5 @@ def serve_grid(node: Any, server: GridServer) -> None:
         node.export(fn, name=fn.__name__)
     # a robot process that dies leaves the team within milliseconds (its liveliness token
     # goes); the lock-step timeout still catches one that hangs
-    node.team.on_leave(lambda name: server.drop(name, "left the team"))
+    # on_gone: a member whose link flaps (leaves and joins again within a second) keeps its body
+    node.team.on_gone(lambda name: server.drop(name, "left the team"))
