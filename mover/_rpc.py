@@ -125,14 +125,18 @@ class RpcServer:
             awaitable = exported.fn(*args, **kwargs)
         task = asyncio.get_running_loop().create_task(self._serve(query, env, exported, awaitable))
         self.tasks[(env.sender, env.call_id)] = task
-        task.add_done_callback(lambda _: self.tasks.pop((env.sender, env.call_id), None))
+
+        def done(_: asyncio.Task[None]) -> None:
+            self.tasks.pop((env.sender, env.call_id), None)
+            if inspect.iscoroutine(awaitable):
+                awaitable.close()  # a no-op unless cancelled before it ever ran
+
+        task.add_done_callback(done)
 
     async def _serve(self, query: Any, env: Envelope, exported: Exported, awaitable: Any) -> None:
         try:
             result = await awaitable
         except asyncio.CancelledError:
-            if inspect.iscoroutine(awaitable):
-                awaitable.close()  # cancelled before it ever ran: no "never awaited" warning
             self._send(query, env, _err("Cancelled", "the call was cancelled"))
             raise
         except Exception as exc:

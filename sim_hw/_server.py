@@ -133,7 +133,9 @@ class WorldServer:
                 self._deadline = loop.call_later(self.timeout, self._expire)
         else:
             self._ensure_clock()
-        return await waiter
+        # Shielded: a retry of this step shares the waiter, and a caller that gives up its
+        # call (its task was cancelled) must not take the retry's readings down with it.
+        return await asyncio.shield(waiter)
 
     async def leave(self, robot: str) -> None:
         """Take ``robot`` out of the world."""

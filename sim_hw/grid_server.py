@@ -159,7 +159,7 @@ class GridServer:
         self._maybe_step()
         if not waiter.done() and self._deadline is None:
             self._deadline = asyncio.get_running_loop().call_later(self.timeout, self._expire)
-        return await waiter
+        return await asyncio.shield(waiter)  # shared with retries: see WorldServer.step
 
     async def leave(self, robot: str) -> None:
         """Take ``robot`` out of the world."""
@@ -243,12 +243,12 @@ class GridServer:
         waiter = self._waiters.get(robot)
         if round < self.round or (round == self.round and robot in self._acted):
             # a retry of an action already applied: the reply it waits for, or the latest
-            return await waiter if waiter is not None else self._readings[robot]
+            return await asyncio.shield(waiter) if waiter is not None else self._readings[robot]
         self._actions[robot] = {**(action or {}), "_round": round}
         if waiter is None:
             waiter = self._waiters[robot] = asyncio.get_running_loop().create_future()
         self._pump()
-        return await waiter
+        return await asyncio.shield(waiter)
 
     def _pump(self) -> None:
         """Apply actions in turn for as long as the robot whose turn it is has sent one."""

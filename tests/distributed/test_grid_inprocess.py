@@ -47,6 +47,21 @@ async def test_a_round_waits_for_every_robot_and_applies_actions_in_name_order()
     assert again is ra
 
 
+@pytest.mark.parametrize("turns", ["together", "sequential"])
+async def test_a_cancelled_step_does_not_fail_its_retry(turns: str) -> None:
+    server = corridor_server(expect=2, turns=turns)
+    await asyncio.gather(server.join("a", {}), server.join("b", {}))
+    given_up = asyncio.ensure_future(server.step("a", 0, {}))
+    await asyncio.sleep(0)
+    retry = asyncio.ensure_future(server.step("a", 0, {}))
+    await asyncio.sleep(0)
+    given_up.cancel()  # the caller gave the first call up; its retry must not lose the round
+    await asyncio.sleep(0)
+    await server.step("b", 0, {})
+    assert (await asyncio.wait_for(retry, 2))["round"] == 1
+    assert given_up.cancelled()
+
+
 async def test_a_silent_robot_is_dropped_after_the_timeout(caplog: pytest.LogCaptureFixture
                                                            ) -> None:
     server = corridor_server(expect=2, timeout=0.05)

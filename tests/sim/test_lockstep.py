@@ -128,3 +128,22 @@ async def test_a_robot_waiting_on_its_team_keeps_ticking() -> None:
     assert busy.clock.now() == pytest.approx(3.0)
     assert waiting.clock.now() >= 3.0
     await server.aclose()
+
+
+async def test_a_cancelled_step_does_not_fail_its_retry() -> None:
+    """A robot process gives up a step (its task was cancelled) and asks again for the same
+    tick: the world cancels the first call, and the retry still gets its readings."""
+    server = WorldServer(World(random_obstacles((6.0, 6.0), 0)), expect=2)
+    await asyncio.gather(in_process(server, "a"), in_process(server, "b"))
+    given_up = asyncio.ensure_future(server.step("a", 0, {"v": 0.1, "w": 0.0}))
+    await asyncio.sleep(0)
+    retry = asyncio.ensure_future(server.step("a", 0, {"v": 0.1, "w": 0.0}))
+    await asyncio.sleep(0)
+    given_up.cancel()  # as the world's RPC server does on the caller's cancel message
+    await asyncio.sleep(0)
+    late = asyncio.ensure_future(server.step("a", 0, {"v": 0.1, "w": 0.0}))  # after the cancel
+    await server.step("b", 0, {"v": 0.0, "w": 0.0})
+    readings = await asyncio.wait_for(asyncio.gather(retry, late), 2.0)
+    assert [r["tick"] for r in readings] == [1, 1]
+    assert given_up.cancelled()
+    await server.aclose()
