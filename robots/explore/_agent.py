@@ -205,10 +205,11 @@ class ExplorerAgent:
         With ``region_choice = "estimate"`` (CU-LVP) the agent instead takes the region with
         the most work it estimates left when it would arrive: the region's unknown cells on its
         own map, less ``STALE_RATE`` cells for every round since it last heard an agent holding
-        that region (that agent has been exploring it since; never heard: since the start),
-        less ``DIST_RATE`` cells per round of travel. Helpers thus go where nobody was heard
-        working lately rather than to the nearest region, which a neighbour has often explored
-        already; ties go to the nearer region."""
+        that region (that agent has been exploring it since; never heard: since the start) but
+        at most ``STALE_CAP`` of them (a lone holder of a large region nobody has heard from
+        has not done it all), less ``DIST_RATE`` cells per round of travel. Helpers thus go
+        where nobody was heard working lately rather than to the nearest region, which a
+        neighbour has often explored already; ties go to the nearer region."""
         targets = (self._flat == UNKNOWN) & (self.region_of >= 0)
         if exclude_current:
             targets &= ~(self._in_region | self._in_merged)
@@ -223,6 +224,7 @@ class ExplorerAgent:
         return True
 
     STALE_RATE = 4.0  # cells an agent is assumed to explore per round in its region
+    STALE_CAP = 0.4  # at most this share of a region's unknown cells is assumed done unseen
     DIST_RATE = 8.0  # extra cells of estimated work a round of travel costs
 
     def _switch_by_estimate(self, targets: np.ndarray) -> bool:
@@ -237,8 +239,10 @@ class ExplorerAgent:
         for r in np.unique(region):
             here = region == r
             d = int(away[here].min())
-            left = (int(here.sum()) - self.STALE_RATE * (self._round + d - self._last_heard[r])
-                    - self.DIST_RATE * d)
+            unknown = int(here.sum())
+            done_unseen = min(self.STALE_RATE * (self._round + d - self._last_heard[r]),
+                              self.STALE_CAP * unknown)
+            left = unknown - done_unseen - self.DIST_RATE * d
             if best is None or (left, -d) > best[0]:
                 best = ((left, -d), int(r))
         assert best is not None
