@@ -6,6 +6,7 @@ Several nodes in one process still talk over real zenoh sessions on 127.0.0.1.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import threading
 
 import pytest
@@ -68,8 +69,9 @@ async def test_pending_call_fails_when_the_caller_closes() -> None:
         await a.close()
         with pytest.raises(NodeClosed):
             await call
-        await asyncio.sleep(1.5)  # after the 1 s grace for a flapping link
-        assert not b._server.tasks  # the callee cancelled the closed caller's call
+        async with asyncio.timeout(10):  # after the 1 s grace for a flapping link
+            while b._server.tasks:  # the callee cancels the closed caller's call
+                await asyncio.sleep(0.05)
 
 
 async def test_subscription_iterates_and_closes() -> None:
@@ -77,8 +79,15 @@ async def test_subscription_iterates_and_closes() -> None:
     team = Team.generate("alpha")
     async with Node("a", team, config=seed) as a, Node("b", team, config=peer) as b:
         sub = b.subscribe("t/x")
+        probe = b.subscribe("t/probe")  # declared after t/x: once a probe gets through, so will t/x
         await a.team.wait_for({"b"}, timeout=10)
-        await asyncio.sleep(0.3)
+        async with asyncio.timeout(10):
+            while True:
+                await a.broadcast("t/probe", 0)
+                with contextlib.suppress(TimeoutError):
+                    await probe.get(timeout=0.1)
+                    break
+        probe.close()
         for i in range(3):
             await a.broadcast("t/x", i, reliable=True)
         got = [(await sub.get(timeout=5)).data for _ in range(3)]

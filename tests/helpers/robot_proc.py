@@ -16,7 +16,7 @@ from typing import Any
 
 from mover import FixedLocator, Node, NodeConfig, Team
 
-TOPICS = ("news", "chatter")
+TOPICS = ("news", "chatter", "probe")
 
 
 async def main(args: argparse.Namespace) -> None:
