@@ -11,6 +11,7 @@ trainees record, and the trainer waits for them before leading on.
 from __future__ import annotations
 
 import json
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -34,9 +35,11 @@ async def follow_trainer(robot: Robot, team: RunTeam, trainer: str,
         records = 0
         for label in shared[trainer]:
             await team.report("leading" if lead else "following", place=label)
-            await team.distributed_or(
-                (lambda label=label: goto_point(robot, (places or {})[label], speed=0.25))
-                if lead else (lambda: follow(robot, trainer)))
+            if lead:
+                x, y = (places or {})[label]
+                await team.distributed_or(partial(goto_point, robot, (x, y), speed=0.25))
+            else:
+                await team.distributed_or(partial(follow, robot, trainer))
             if not lead:
                 _record(dataset, label, team.me, snapshot(robot))
                 records += 1

@@ -26,6 +26,7 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -101,14 +102,16 @@ def run_trial(
     if ants:
         field_ = PheromoneField(~grid.obstacles)
         world = GridWorld(grid, base, res, n_agents, pheromone=field_)
-        agents: list = [AntAgent(r, setup.q_max) for r in rngs]
+        agents: list[Any] = [AntAgent(r, setup.q_max) for r in rngs]
     else:
         world = GridWorld(grid, base, res, n_agents)
         agents = [
             CMarkingAgent(r, setup.q_max, not literal, forget_at_base, colour_source) for r in rngs
         ]
     step = world.step
-    done = (lambda: world.all_delivered) if until == "delivered" else (lambda: world.exhausted)
+    def done() -> bool:
+        return bool(world.all_delivered if until == "delivered" else world.exhausted)
+
     while not done() and world.iteration < max_iterations:
         step(agents, ants)
     return Trial(world.iteration, done(), world.iteration * n_agents)
@@ -222,7 +225,7 @@ def _runs(row: Row) -> str:
     return f"{row.n:5d} runs, se {100 * row.rel_se:4.1f}%{miss}"
 
 
-def table1(args: argparse.Namespace, out: dict) -> list[Row]:
+def table1(args: argparse.Namespace, out: dict[str, Any]) -> list[Row]:
     """Table 1: Setup 1, 5 to 160 agents."""
     rows = []
     counts = args.agents or sorted(PAPER_T1)
@@ -241,7 +244,7 @@ def table1(args: argparse.Namespace, out: dict) -> list[Row]:
     return rows
 
 
-def table2(args: argparse.Namespace, out: dict) -> list[Row]:
+def table2(args: argparse.Namespace, out: dict[str, Any]) -> list[Row]:
     """Table 2: Setup 2, 1 to 8 agents, projected V_ref / n vs measured."""
     counts = args.agents or sorted(PAPER_T2)
     rows = [
@@ -265,7 +268,9 @@ def table2(args: argparse.Namespace, out: dict) -> list[Row]:
     return rows
 
 
-def table3(args: argparse.Namespace, out: dict, kinds: tuple[str, ...]) -> dict[str, list[Row]]:
+def table3(
+    args: argparse.Namespace, out: dict[str, Any], kinds: tuple[str, ...]
+) -> dict[str, list[Row]]:
     """Table 3 (c-marking) and Figure 9 (with ants): Setup 3 at each size, 50 agents."""
     sizes = args.sizes or sorted(PAPER_T3)
     rows: dict[str, list[Row]] = {}
@@ -334,7 +339,7 @@ def plot(out_dir: Path, name: str, xs: list[int], series: dict[str, list[float]]
 
 def run(args: argparse.Namespace) -> int:
     """Run the selected tables, print them beside the paper's, write plots, maybe JSON."""
-    out: dict = {"seed": args.seed, "runs": args.runs or "auto", "until": args.until,
+    out: dict[str, Any] = {"seed": args.seed, "runs": args.runs or "auto", "until": args.until,
                  "literal": args.literal, "forget_at_base": args.forget_at_base,
                  "colour_on_move": args.colour_on_move}  # fmt: skip
     out_dir = Path(args.out)
@@ -401,7 +406,7 @@ def _int_list(text: str) -> list[int]:
     return [int(x) for x in text.split(",") if x]
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Add the ``foraging`` experiment to ``mover experiment``."""
     p = sub.add_parser(
         "foraging",

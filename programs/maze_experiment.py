@@ -186,7 +186,7 @@ def trials(args: argparse.Namespace) -> list[dict[str, Any]]:
 
 
 def _runs_for(args: argparse.Namespace, method: str) -> int:
-    return min(args.runs, args.hedac_runs) if method == "hedac" else args.runs
+    return int(min(args.runs, args.hedac_runs) if method == "hedac" else args.runs)
 
 
 def _progress(done: int, total: int, start: float, what: str) -> None:

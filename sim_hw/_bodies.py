@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import pymunk
 
@@ -49,7 +50,12 @@ def add_walls(space: pymunk.Space, width: float, height: float) -> list[pymunk.S
     return shapes
 
 
-def _poly_box(body: pymunk.Body, size: tuple[float, float], angle: float, center=(0.0, 0.0)):
+def _poly_box(
+    body: pymunk.Body,
+    size: tuple[float, float],
+    angle: float,
+    center: tuple[float, float] = (0.0, 0.0),
+) -> pymunk.Poly:
     w, h = size
     rot = pymunk.Transform.rotation(angle)
     move = pymunk.Transform.translation(*center)
@@ -57,9 +63,12 @@ def _poly_box(body: pymunk.Body, size: tuple[float, float], angle: float, center
     return pymunk.Poly(body, pts, transform=move @ rot, radius=0.0)
 
 
-def add_obstacle(space: pymunk.Space, spec: ObstacleSpec, category: int = CAT_WALL):
+def add_obstacle(
+    space: pymunk.Space, spec: ObstacleSpec, category: int = CAT_WALL
+) -> pymunk.Shape:
     """A static shape for an obstacle spec."""
     body = space.static_body
+    shape: pymunk.Shape
     if spec.shape == "box":
         shape = _poly_box(body, spec.size, spec.angle, spec.center)
     elif spec.shape == "circle":
@@ -132,7 +141,7 @@ class RobotBody:
         self.pivot.max_force = force
         self.gear.max_force = force * self.spec.track / 2.0
 
-    def parts(self) -> tuple:
+    def parts(self) -> tuple[Any, ...]:
         """Everything to add to or remove from the space."""
         return (self.body, self.control, self.shape, self.pivot, self.gear)
 

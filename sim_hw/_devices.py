@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pymunk
@@ -112,7 +113,7 @@ def camera_sightings(
     fov: float,
     occlusion: bool,
     entities: dict[pymunk.Shape, Entity],
-) -> list[list]:
+) -> list[list[Any]]:
     """``[kind, id, status, range, bearing]`` for each entity whose centre is within range and
     the field of view (and, with ``occlusion``, not behind a wall), nearest first."""
     x, y, heading = pose

@@ -156,7 +156,8 @@ class SimHardware:
 
     def side(self) -> BumperSide | None:
         """Which side of the bumper touches."""
-        return self.readings["bump"]
+        side: BumperSide | None = self.readings["bump"]
+        return side
 
     def pose(self) -> tuple[float, float, float]:
         """Dead-reckoned pose."""
@@ -276,7 +277,8 @@ async def in_process(server: Any, robot_id: str, spec: dict[str, Any] | None = N
     joined = await server.join(robot_id, spec)
 
     async def exchange(tick: int, command: Command) -> Readings:
-        return await server.step(robot_id, tick, command)
+        readings: Readings = await server.step(robot_id, tick, command)
+        return readings
 
     return SimHardware(robot_id, joined["spec"], joined["readings"], exchange).hardware()
 
@@ -326,6 +328,7 @@ async def remote(
     joined = await call("join", robot_id, spec or {})
 
     async def exchange(tick: int, command: Command) -> Readings:
-        return await call("step", robot_id, tick, command)
+        readings: Readings = await call("step", robot_id, tick, command)
+        return readings
 
     return SimHardware(robot_id, joined["spec"], joined["readings"], exchange).hardware()

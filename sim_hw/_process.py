@@ -21,10 +21,10 @@ STATE_TOPIC = "world/state"
 def serve_world(node: Any, server: WorldServer, *, state_topic: str = STATE_TOPIC) -> None:
     """Export ``server``'s three calls on ``node`` and send its snapshots to ``state_topic``."""
 
-    async def join(robot: str, spec: dict) -> dict:
+    async def join(robot: str, spec: dict[str, Any]) -> dict[str, Any]:
         return await server.join(robot, spec or None)
 
-    async def step(robot: str, tick: int, command: dict) -> dict:
+    async def step(robot: str, tick: int, command: dict[str, Any]) -> dict[str, Any]:
         return await server.step(robot, tick, command)
 
     async def leave(robot: str) -> None:

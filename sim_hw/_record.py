@@ -9,6 +9,7 @@ logged commands reproduces it (PYMUNK-NOTES.md, determinism).
 from __future__ import annotations
 
 import json
+from collections.abc import Sequence
 from dataclasses import asdict
 from pathlib import Path
 from typing import IO, Any
@@ -119,7 +120,9 @@ def plot_recording(path: str | Path, out: str | Path) -> None:
     plt.close(fig)
 
 
-def _corners(center, size, angle) -> list[tuple[float, float]]:
+def _corners(
+    center: Sequence[float], size: Sequence[float], angle: float
+) -> list[tuple[float, float]]:
     import math
 
     cx, cy = center

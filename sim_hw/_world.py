@@ -11,8 +11,9 @@ from __future__ import annotations
 import logging
 import math
 import zlib
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 import pymunk
@@ -20,6 +21,8 @@ from pymunk._chipmunk import lib as _lib
 
 from . import _bodies, _devices
 from ._spec import RobotSpec, WorldSpec
+
+_T = TypeVar("_T")
 
 log = logging.getLogger("sim_hw.world")
 
@@ -131,7 +134,8 @@ class World:
         parts = _bodies.make_robot(spec, pose, group)
         self.space.add(*parts.parts())
         rng = np.random.default_rng([self.seed, zlib.crc32(robot_id.encode())])
-        robot = _Robot(robot_id, group, parts, rng, list(pose), tuple(pose), led=spec.led)
+        start = (float(pose[0]), float(pose[1]), float(pose[2]))
+        robot = _Robot(robot_id, group, parts, rng, list(pose), start, led=spec.led)
         robot.angles = spec.sonar.angles() if spec.sonar else ()
         self.robots[robot_id] = robot
         self.entities[parts.shape] = _devices.Entity(
@@ -288,7 +292,7 @@ class World:
         readings["push"] = self._push_reading(robot)
         return readings
 
-    def _push_reading(self, robot: _Robot) -> list | None:
+    def _push_reading(self, robot: _Robot) -> list[Any] | None:
         push = robot.push
         if push is None:
             return None
@@ -323,7 +327,7 @@ class World:
         }
 
 
-def _center_of(body: pymunk.Body):
+def _center_of(body: pymunk.Body) -> Callable[[], tuple[float, float]]:
     def center() -> tuple[float, float]:
         x, y = body.position
         return (float(x), float(y))
@@ -331,5 +335,5 @@ def _center_of(body: pymunk.Body):
     return center
 
 
-def _const(value):
+def _const(value: _T) -> Callable[[], _T]:
     return lambda: value

@@ -15,9 +15,10 @@ from __future__ import annotations
 import json
 import math
 import tomllib
+from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 
@@ -33,6 +34,8 @@ from ._spec import (
     SonarSpec,
     WorldSpec,
 )
+
+_T = TypeVar("_T")
 
 
 class WorldFileError(ValueError):
@@ -116,7 +119,9 @@ class _Table:
             raise self.fail(key, f"must be true or false, got {value!r}")
         return value
 
-    def vector(self, key: str, n: int, default: tuple | None = None, *, positive: bool = False):
+    def vector(
+        self, key: str, n: int, default: tuple[float, ...] | None = None, *, positive: bool = False
+    ) -> Any:
         value = self.get(key)
         if value is None:
             if default is None:
@@ -155,7 +160,8 @@ class _Table:
 
 
 def _kind(value: Any) -> str:
-    return {dict: "a table", list: "a list", str: "a string"}.get(type(value), repr(value))
+    kinds: dict[type, str] = {dict: "a table", list: "a list", str: "a string"}
+    return kinds.get(type(value), repr(value))
 
 
 def _robot(t: _Table, base: RobotSpec) -> RobotSpec:
@@ -192,7 +198,9 @@ def _robot(t: _Table, base: RobotSpec) -> RobotSpec:
     return spec
 
 
-def _device(t: _Table, key: str, current, read, fresh):
+def _device(
+    t: _Table, key: str, current: _T | None, read: Callable[[_Table, _T], _T], fresh: _T
+) -> _T | None:
     value = t.data.get(key)
     if value is False:
         t.seen.add(key)
@@ -378,7 +386,7 @@ def parse_world(data: Any, source: str) -> WorldSpec:
     return spec
 
 
-def _finish(t: _Table, made):
+def _finish(t: _Table, made: _T) -> _T:
     t.done()
     return made
 

@@ -164,7 +164,7 @@ class MazeWorld:
         if n_agents > len(maze.starts):
             raise ValueError(f"{n_agents} agents but the maze has {len(maze.starts)} starts")
         self.grid = maze.grid
-        self.positions = [tuple(p) for p in maze.starts[:n_agents]]
+        self.positions = [(int(p[0]), int(p[1])) for p in maze.starts[:n_agents]]
         for p in self.positions:
             if self.grid[p] != FREE:
                 raise ValueError(f"start {p} is not a free cell")

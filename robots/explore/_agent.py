@@ -82,7 +82,7 @@ class ExplorerAgent:
         self.region_of = voronoi_partition(self.known != OBSTACLE, list(starts)).ravel()
         self.regions: frozenset[int] = frozenset({agent_id})  # assigned: explored first
         self.merged: frozenset[int] = frozenset()  # regions of agents met, explored next
-        self._in_region = self.region_of == agent_id
+        self._in_region: np.ndarray = self.region_of == agent_id
         self._in_merged = np.zeros(self.region_of.shape, dtype=bool)
         self.goal: int | None = None
         self.peers: dict[int, Peer] = {}
@@ -188,11 +188,12 @@ class ExplorerAgent:
         "the primary focus remains on achieving complete coverage within the assigned
         region"). With ``region_choice = "estimate"`` (CU-LVP) only the assigned region: once
         it is explored, ``switch_region`` picks the next by the work estimated left in it."""
-        unknown = self._flat == UNKNOWN
-        own = unknown & self._in_region
-        if self._estimate:
+        unknown: np.ndarray = self._flat == UNKNOWN
+        own: np.ndarray = unknown & self._in_region
+        if self._estimate or own.any():
             return own
-        return own if own.any() else unknown & self._in_merged
+        merged: np.ndarray = unknown & self._in_merged
+        return merged
 
     def in_region(self) -> np.ndarray:
         """Flat mask of the agent's assigned region."""

@@ -47,6 +47,7 @@ def random_obstacles(
     grid = Grid(obst.reshape(height, width), cell_size)
     if not connected:
         return grid
+    root: tuple[int, int] | None
     if keep_free:
         root = keep_free[0]
     else:

@@ -232,8 +232,8 @@ class GridWorld:
             field.values = np.array(ph["values"], dtype=float)
         world = cls(
             grid,
-            tuple(data["base"]),  # type: ignore[arg-type]
-            starts=[tuple(p) for p in data["positions"]],  # type: ignore[misc]
+            tuple(data["base"]),
+            starts=[tuple(p) for p in data["positions"]],
             pheromone=field,
         )
         world.marks = list(data["marks"])
