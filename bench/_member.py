@@ -12,7 +12,8 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from mover import Node, NodeConfig, ProgramHost, RunTeam, Team
+from mover import RunTeam
+from mover.testing import serve_programs
 
 
 async def bench_or(robot: None, team: RunTeam, rounds: int) -> list[list[Any]]:
@@ -52,15 +53,8 @@ async def bench_and(
     return out
 
 
-async def main(name: str) -> None:
-    async with Node(name, Team.from_env(), config=NodeConfig.from_env()) as node:
-        ProgramHost(node, {"bench_or": bench_or, "bench_and": bench_and}, robot=None)
-        await node.team.wait_for({name}, timeout=30)
-        print("READY", flush=True)
-        await asyncio.get_running_loop().run_in_executor(None, sys.stdin.read)
-
-
 if __name__ == "__main__":
     p = argparse.ArgumentParser()
     p.add_argument("--name", required=True)
-    asyncio.run(main(p.parse_args().name))
+    programs = {"bench_or": bench_or, "bench_and": bench_and}
+    asyncio.run(serve_programs(p.parse_args().name, programs))

@@ -20,13 +20,15 @@ import asyncio
 import os
 import signal
 import sys
-from collections.abc import AsyncIterator
+from collections.abc import AsyncIterator, Callable, Mapping
 from contextlib import asynccontextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 from ._config import NodeConfig, Team, free_port
 from ._node import Node
+from ._programs import ProgramHost
 
 
 @dataclass
@@ -136,3 +138,22 @@ async def cluster(team: Team | None = None, **kwargs: object) -> AsyncIterator[C
         yield c
     finally:
         await c.stop()
+
+
+async def serve_programs(
+    name: str, programs: Mapping[str, Callable[..., Any]], *, timeout: float = 30.0
+) -> None:
+    """Be the team member ``name`` hosting ``programs`` (no hardware) until stdin closes.
+
+    The body of a helper process started with :meth:`Cluster.start`: team and zenoh settings
+    come from the environment, and it prints ``READY`` once it is a member (TimeoutError after
+    ``timeout`` s)::
+
+        if __name__ == "__main__":
+            asyncio.run(serve_programs(sys.argv[1], {"my_program": my_program}))
+    """
+    async with Node(name, Team.from_env(), config=NodeConfig.from_env()) as node:
+        ProgramHost(node, programs, robot=None)
+        await node.team.wait_for({name}, timeout=timeout)
+        print("READY", flush=True)
+        await asyncio.get_running_loop().run_in_executor(None, sys.stdin.read)

@@ -8,11 +8,11 @@ from __future__ import annotations
 import argparse
 import asyncio
 import logging
-import sys
 import time
 from pathlib import Path
 
-from mover import MemberLost, Node, NodeConfig, ProgramHost, RunTeam, Team
+from mover import MemberLost, RunTeam
+from mover.testing import serve_programs
 
 
 async def ties(robot: None, team: RunTeam, rounds: int, start: float, gap: float) -> list[str]:
@@ -76,16 +76,8 @@ async def and_outage(robot: None, team: RunTeam, hold: float) -> dict[str, str]:
 PROGRAMS = {"ties": ties, "cleanup": cleanup, "and_wait": and_wait, "and_outage": and_outage}
 
 
-async def main(name: str) -> None:
-    async with Node(name, Team.from_env(), config=NodeConfig.from_env()) as node:
-        ProgramHost(node, PROGRAMS, robot=None)
-        await node.team.wait_for({name}, timeout=10)
-        print("READY", flush=True)
-        await asyncio.get_running_loop().run_in_executor(None, sys.stdin.read)
-
-
 if __name__ == "__main__":
     p = argparse.ArgumentParser()
     p.add_argument("--name", required=True)
     logging.basicConfig(level=logging.WARNING, format="%(name)s %(levelname)s %(message)s")
-    asyncio.run(main(p.parse_args().name))
+    asyncio.run(serve_programs(p.parse_args().name, PROGRAMS, timeout=10))
