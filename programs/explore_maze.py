@@ -10,7 +10,9 @@ Every member runs the same :class:`~robots.explore.ExplorerAgent` the in-process
 3. waits for the broadcasts of this round from the members the radio medium says are in range
    (the grid world's step reply tells), so that it hears exactly what the in-process agent
    would; a member that leaves the team is not waited for;
-4. decides and moves.
+4. if it heard anyone, relays what it heard to them and hears their relays, ``exchanges - 1``
+   times (:data:`robots.explore.EXCHANGES`), waiting for each as in 3;
+5. decides and moves.
 
 The team's start cells and the maze's shape are launch data, as team membership is (the
 agents derive the same Voronoi partition from them); agent ``i`` is the ``i``-th member in
@@ -29,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from mover import pack
-from robots.explore import FREE, OBSTACLE, STAY, UNKNOWN, ExplorerAgent, make_policy
+from robots.explore import EXCHANGES, FREE, OBSTACLE, STAY, UNKNOWN, ExplorerAgent, make_policy
 from robots.grid_hal import GridHardware, direction_of
 
 from .foraging import member_index, start_round
@@ -39,9 +41,12 @@ TOPIC = "maze"
 HEAR_TIMEOUT = 10.0
 
 
-async def _hear(robot: Any, sub: Any, inbox: dict[int, dict[str, Any]], round: int,
+Exchange = tuple[int, int]  # (round, exchange within the round)
+
+
+async def _hear(robot: Any, sub: Any, inbox: dict[Exchange, dict[str, Any]], round: Exchange,
                 expected: set[str]) -> dict[str, dict[str, Any]]:
-    """The broadcasts of ``round`` from ``expected``; others are kept for their round."""
+    """The broadcasts of exchange ``round`` from ``expected``; later ones are kept for theirs."""
     node = robot.node
     got = inbox.pop(round, {})
     deadline = time.monotonic() + HEAR_TIMEOUT
@@ -55,7 +60,7 @@ async def _hear(robot: Any, sub: Any, inbox: dict[int, dict[str, Any]], round: i
             msg = await sub.get(timeout=0.25)
         except TimeoutError:
             continue
-        k = int(msg.data["round"])
+        k = (int(msg.data["round"]), int(msg.data.get("exchange", 0)))
         if k == round:
             got[msg.sender] = msg.data["agent"]
         elif k > round:
@@ -74,17 +79,19 @@ def map_text(agent: ExplorerAgent) -> str:
 async def explore_maze(robot: Any, team: Any, method: str = "cu_lvp", seed: int = 0,
                        starts: list[list[int]] | None = None,
                        shape: list[int] | None = None, max_rounds: int = 0,
-                       snapshot_dir: str = "") -> dict[str, Any]:
+                       snapshot_dir: str = "", exchanges: int = EXCHANGES) -> dict[str, Any]:
     """Explore the maze with ``method`` (cu_lvp, nf, cu_mnm, cu_jgr, cu_bso, hedac).
 
     ``starts`` are every member's start cell in member-name order and ``shape`` the maze's
     (rows, cols). ``seed`` gives agent ``i`` the ``i``-th child of ``SeedSequence(seed)``, as
     the in-process ``make_team`` does. With ``snapshot_dir`` the robot writes its map there
     (``<robot>.txt``) at the end. Returns rounds, cells moved, message bytes sent (msgpack),
-    cells known.
+    cells known. ``exchanges`` is the number of map exchanges per round (1: the paper's).
     """
     if not starts or not shape:
         raise ValueError("starts and shape are needed (launch data: the team's start cells)")
+    if exchanges < 1:
+        raise ValueError(f"exchanges must be at least 1, not {exchanges}")
     hw: GridHardware = robot.hw
     n = len(team.members)
     if len(starts) != n:
@@ -99,7 +106,7 @@ async def explore_maze(robot: Any, team: Any, method: str = "cu_lvp", seed: int 
     reach = radio.range + 2  # the medium decides who hears; moving one cell must not lose it
     topic = f"{TOPIC}/{team.run}"
     rounds = moves = sent = 0
-    inbox: dict[int, dict[str, Any]] = {}
+    inbox: dict[Exchange, dict[str, Any]] = {}
     # subscribed before the start step: no member broadcasts before every one listens
     async with robot.node.subscribe(topic) as sub, \
             hw.clock.owned(at=await start_round(hw, team)):
@@ -116,8 +123,17 @@ async def explore_maze(robot: Any, team: Any, method: str = "cu_lvp", seed: int 
             await robot.node.broadcast(topic, {"round": now, "agent": message},
                                        range=reach if reach != float("inf") else None,
                                        reliable=True)
-            heard = await _hear(robot, sub, inbox, now, set(radio.in_range()))
+            hearers = set(radio.in_range())
+            heard = await _hear(robot, sub, inbox, (now, 0), hearers)
             agent.observe(heard_messages=sorted(heard.values(), key=lambda m: m["id"]))
+            for k in range(1, exchanges if hearers else 1):
+                relay = agent.relay_message()
+                sent += len(pack(relay))
+                await robot.node.broadcast(topic, {"round": now, "exchange": k, "agent": relay},
+                                           range=reach if reach != float("inf") else None,
+                                           reliable=True)
+                heard = await _hear(robot, sub, inbox, (now, k), hearers)
+                agent.hear_relay(sorted(heard.values(), key=lambda m: m["id"]))
             move = agent.decide()
             hw.drive.move(direction_of(*move) if move != STAY else None)
             await hw.clock.tick()

@@ -4,9 +4,10 @@ Linardakis et al., sections IV-V. Each trial builds a maze (section IV-A), puts 
 first N start cells, and runs rounds until the union of the agents' maps knows every inner cell
 the agents can see (an observer measures it; the agents never see it). Per round every agent
 senses, broadcasts what changed (msgpack, delivered to the agents within range and decoded
-from the bytes), hears, decides, and moves, in agent order (a move into an occupied cell
-fails). Metrics (section IV-C): rounds, exploration cost (4-connected moves made), efficiency
-M / cost, map quality (M - errors) / P, communication (bytes actually sent beside the paper's
+from the bytes), hears, relays what it heard to the same agents (``--exchanges``), decides,
+and moves, in agent order (a move into an occupied cell fails). Metrics (section IV-C):
+rounds, exploration cost (4-connected moves made), efficiency M / cost, map quality
+(M - errors) / P, communication (bytes actually sent, relays included, beside the paper's
 equation (8)), and computation time per agent step (equation (4) uses its mean times rounds).
 """
 
@@ -25,7 +26,7 @@ from typing import Any
 import msgpack
 import numpy as np
 
-from robots.explore import METHODS, make_team
+from robots.explore import EXCHANGES, METHODS, make_team
 from sim_hw.maze import FREE, Maze, MazeFileError, MazeWorld, generate_maze, load_maze
 
 AGENT_COUNTS = (1, 2, 4, 6, 8, 10, 15, 20)
@@ -69,9 +70,10 @@ def observable(grid: np.ndarray, starts: list[tuple[int, int]], reach: int = 2) 
 
 def run_trial(
     maze: Maze, n_agents: int, method: str, seed: np.random.SeedSequence,
-    max_rounds: int | None = None,
+    max_rounds: int | None = None, exchanges: int = EXCHANGES,
 ) -> dict[str, Any]:
-    """One seeded exploration run; returns its metrics (section IV-C)."""
+    """One seeded exploration run; returns its metrics (section IV-C). ``exchanges`` is the
+    number of map exchanges per round (:data:`robots.explore.EXCHANGES`; 1: the paper's)."""
     world = MazeWorld(maze, n_agents)
     team = make_team(method, maze.shape, list(world.positions), seed)
     target = observable(maze.grid, list(world.positions))
@@ -112,6 +114,28 @@ def run_trial(
         for i, agent in enumerate(team):
             t0 = time.perf_counter()
             agent.observe(heard_messages=inbox[i])
+            busy += time.perf_counter() - t0
+        for _ in range(exchanges - 1):  # relays, among the agents that heard each other
+            relays: list[list[dict[str, Any]]] = [[] for _ in team]
+            for i, agent in enumerate(team):
+                hearers = world.neighbours(i)
+                if not hearers:
+                    continue
+                t0 = time.perf_counter()
+                packed = msgpack.packb(agent.relay_message())
+                busy += time.perf_counter() - t0
+                sent += len(packed)
+                heard_bytes += len(packed)
+                msg = msgpack.unpackb(packed)
+                for j in hearers:
+                    relays[j].append(msg)
+            for i, agent in enumerate(team):
+                if relays[i]:
+                    t0 = time.perf_counter()
+                    agent.hear_relay(relays[i])
+                    busy += time.perf_counter() - t0
+        for i, agent in enumerate(team):
+            t0 = time.perf_counter()
             move = agent.decide()
             busy += time.perf_counter() - t0
             cost += world.move(i, move)
@@ -176,7 +200,7 @@ def trials(args: argparse.Namespace) -> list[dict[str, Any]]:
                     continue
                 key = (args.seed, args.size, round(p * 1000) if p == p else 0, run, n,
                        list(METHODS).index(m))
-                rec = run_trial(maze, n, m, _seq(*key))
+                rec = run_trial(maze, n, m, _seq(*key), exchanges=args.exchanges)
                 rec.update(method=m, agents=n, p=None if p != p else p, run=run)
                 records.append(rec)
                 done += 1
@@ -354,6 +378,9 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser.add_argument("--size", type=int, default=30, help="nominal maze size (default 30)")
     parser.add_argument("--p", type=_csv(float), default=list(PROBABILITIES),
                         help="comma list of obstacle probabilities (default 0.85,0.15)")
+    parser.add_argument("--exchanges", type=int, default=EXCHANGES,
+                        help=f"map exchanges per round (default {EXCHANGES}: two relay hops;"
+                             " 1: the paper's single exchange)")
     parser.add_argument("--maze", type=Path, default=None, help="run on this maze JSON file")
     parser.add_argument("--out", type=Path, default=Path("out"), help="plot directory")
     parser.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
@@ -371,8 +398,8 @@ def run(args: argparse.Namespace) -> int:
         args.seed = secrets.randbits(32)
     if args.hedac_runs is None:
         args.hedac_runs = args.runs
-    if args.runs < 1 or min(args.agents) < 1:
-        print("error: --runs and --agents must be positive", file=sys.stderr)
+    if args.runs < 1 or min(args.agents) < 1 or args.exchanges < 1:
+        print("error: --runs, --agents and --exchanges must be positive", file=sys.stderr)
         return 2
     args.maze_data = None
     if args.maze is not None:
@@ -390,7 +417,8 @@ def run(args: argparse.Namespace) -> int:
     print(f"seed: {args.seed}")
     print(f"methods: {','.join(args.methods)}  agents: {','.join(map(str, args.agents))}  "
           f"runs: {args.runs} (hedac {min(args.runs, args.hedac_runs)})  "
-          + (f"maze: {args.maze}" if args.maze else f"size: {args.size}  p: {args.p}"))
+          + (f"maze: {args.maze}" if args.maze else f"size: {args.size}  p: {args.p}")
+          + f"  exchanges: {args.exchanges}")
     records = trials(args)
     print(tables(records, args.methods, args.agents))
     scores = composite(records, args.methods, args.agents)

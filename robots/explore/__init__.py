@@ -3,14 +3,15 @@
 Each agent is an :class:`ExplorerAgent` (its own map, region, and what it heard) with a
 :class:`Policy` that turns that knowledge into a move. The same objects run in-process
 (``programs/maze_experiment.py``) and, one per process, on a grid world:
-``observe(seen_cells, heard_messages)``, ``outgoing_message()`` (msgpack-able), ``decide()``.
+``observe(seen_cells, heard_messages)``, ``outgoing_message()`` (msgpack-able), the relays
+``relay_message()`` / ``hear_relay()`` (see :data:`EXCHANGES`), ``decide()``.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ._agent import STAY, ExplorerAgent, Move, Peer, Policy
+from ._agent import EXCHANGES, STAY, ExplorerAgent, Move, Peer, Policy
 from ._frontier import CULVP, CostUtilityBSO, CostUtilityJGR, CostUtilityMNM, NearestFrontier
 from ._grid import AGENT, FREE, OBSTACLE, UNKNOWN
 from ._hedac import Hedac, attracting_field
@@ -52,6 +53,7 @@ def make_team(
 __all__ = [
     "AGENT",
     "CULVP",
+    "EXCHANGES",
     "FREE",
     "METHODS",
     "OBSTACLE",

@@ -6,7 +6,9 @@ and inside a robot process on a grid world. Per round the owner calls
 1. ``observe(seen_cells=..., position=...)`` with what the star sensor saw;
 2. ``outgoing_message()`` and broadcasts it (msgpack-able) to the agents within range;
 3. ``observe(heard_messages=[...])`` with the messages heard this round (possibly none);
-4. ``decide()`` and drives the returned move ``(d_row, d_col)``.
+4. if it heard anyone, ``EXCHANGES - 1`` more times: ``relay_message()`` to the same agents,
+   then ``hear_relay([...])`` with theirs (what an agent learns travels that many hops a round);
+5. ``decide()`` and drives the returned move ``(d_row, d_col)``.
 
 No central map: an agent decides only from its own map and what it has heard. Messages carry
 only what changed since the agent's last message, except that when an agent hears a peer it did
@@ -26,6 +28,11 @@ from ._voronoi import voronoi_partition
 
 Move = tuple[int, int]
 STAY: Move = (0, 0)
+#: Map exchanges per round: the first carries position, goal and regions; the others relay
+#: what was heard, so that news crosses a chain of agents in range of each other in one round
+#: (the authors' code, which shares maps after every agent's move, reaches the whole chain).
+#: 1 is the paper's one exchange per round.
+EXCHANGES = 3
 
 
 class Policy(Protocol):
@@ -78,6 +85,9 @@ class ExplorerAgent:
         self._estimate = getattr(policy, "region_choice", "nearest") == "estimate"
         self._round = 0  # rounds heard so far (``observe(heard_messages=...)`` calls)
         self._last_heard = np.zeros(len(starts))  # round an agent holding region r was heard
+        self._holders: dict[int, dict[int, int]] = {}  # region -> {agent: cell last heard at}
+        self._share_key: tuple[int, int, frozenset[int]] | None = None
+        self._share: np.ndarray | None = None
         # Section III-B: regions from the initial map, where all unknown space counts as free.
         self.region_of = voronoi_partition(self.known != OBSTACLE, list(starts)).ravel()
         self.regions: frozenset[int] = frozenset({agent_id})  # assigned: explored first
@@ -137,17 +147,19 @@ class ExplorerAgent:
             sender = int(msg["id"])
             if sender == self.id:
                 continue
-            for key, value in (("free", FREE), ("obstacle", OBSTACLE)):
-                idx = np.frombuffer(msg[key], dtype=self._dtype).astype(np.intp)
-                new = idx[self._flat[idx] == UNKNOWN]
-                self._flat[new] = value
-                self._fresh[new] = True
+            self._merge_cells(msg)
             goal = msg.get("goal")
             peer_regions = frozenset(int(r) for r in msg["regions"])
-            peers[sender] = Peer(self._index(msg["pos"]),
-                                 None if goal is None else self._index(goal), peer_regions)
+            peer = Peer(self._index(msg["pos"]), None if goal is None else self._index(goal),
+                        peer_regions)
+            peers[sender] = peer
             for r in peer_regions:
                 self._last_heard[r] = self._round
+            for r, holders in self._holders.items():
+                if r not in peer_regions:
+                    holders.pop(sender, None)
+            for r in peer_regions:
+                self._holders.setdefault(r, {})[sender] = peer.pos
             merged |= peer_regions  # section III-B: regions merge when agents are in range
         if set(peers) - self._heard_before:
             self._send_full = True  # a newcomer missed our earlier deltas
@@ -158,21 +170,42 @@ class ExplorerAgent:
             self.merged = frozenset(merged)
             self._in_merged = np.isin(self.region_of, list(self.merged))
 
-    def outgoing_message(self) -> dict[str, Any]:
-        """This round's broadcast: position, goal, regions and the map cells that changed."""
+    def _merge_cells(self, msg: dict[str, Any]) -> None:
+        for key, value in (("free", FREE), ("obstacle", OBSTACLE)):
+            idx = np.frombuffer(msg[key], dtype=self._dtype).astype(np.intp)
+            new = idx[self._flat[idx] == UNKNOWN]
+            self._flat[new] = value
+            self._fresh[new] = True  # passed on in this agent's next message
+
+    def _cells(self) -> dict[str, Any]:
+        """The map cells learned since the last message (all of them for a newcomer)."""
         mask = (self._flat != UNKNOWN) & ~self._border.ravel() if self._send_full else self._fresh
         self._send_full = False
         free = np.flatnonzero(mask & (self._flat == FREE)).astype(self._dtype)
         obstacle = np.flatnonzero(mask & (self._flat == OBSTACLE)).astype(self._dtype)
         self._fresh[:] = False
+        return {"id": self.id, "free": free.tobytes(), "obstacle": obstacle.tobytes()}
+
+    def outgoing_message(self) -> dict[str, Any]:
+        """This round's broadcast: position, goal, regions and the map cells that changed."""
         return {
-            "id": self.id,
+            **self._cells(),
             "pos": list(self.position),
             "goal": None if self.goal is None else list(self.cell(self.goal)),
             "regions": sorted(self.regions),
-            "free": free.tobytes(),
-            "obstacle": obstacle.tobytes(),
         }
+
+    def relay_message(self) -> dict[str, Any]:
+        """A further exchange of the round: the map cells heard since the last message (the
+        whole map if a newcomer was heard), for the same agents; see :data:`EXCHANGES`."""
+        return self._cells()
+
+    def hear_relay(self, messages: list[dict[str, Any]]) -> None:
+        """Merge the map cells of the relay messages heard (position and goals stay as heard
+        in the round's first exchange)."""
+        for msg in messages:
+            if int(msg["id"]) != self.id:
+                self._merge_cells(msg)
 
     # -- regions -----------------------------------------------------------------------------
     def set_regions(self, regions: set[int] | frozenset[int]) -> None:
@@ -187,13 +220,40 @@ class ExplorerAgent:
         region, or, once it is explored, of the regions merged from agents met (section III-B:
         "the primary focus remains on achieving complete coverage within the assigned
         region"). With ``region_choice = "estimate"`` (CU-LVP) only the assigned region: once
-        it is explored, ``switch_region`` picks the next by the work estimated left in it."""
+        it is explored, ``switch_region`` picks the next by the work estimated left in it, and
+        while helping there the agent takes the part of it nearer to itself than to the
+        region's holders (``_share_with_holders``), as long as that part has unknown cells."""
         unknown: np.ndarray = self._flat == UNKNOWN
         own: np.ndarray = unknown & self._in_region
-        if self._estimate or own.any():
+        if self._estimate:
+            share = own & self._share_with_holders()
+            return share if share.any() else own
+        if own.any():
             return own
         merged: np.ndarray = unknown & self._in_merged
         return merged
+
+    def _share_with_holders(self) -> np.ndarray:
+        """For a helper (an agent holding a region not its own): the cells it is nearer to
+        (on its map) than every other agent it last heard holding that region, at the cell
+        it was heard at; everything for an agent in its own region. Helpers thus start on the
+        far side of the region from its holder, not on the near side it has likely explored."""
+        key = (self._round, self.pos, self.regions)
+        if self._share is not None and self._share_key == key:
+            return self._share
+        share = np.ones(self._flat.shape, dtype=bool)
+        holders = {pid: cell for r in self.regions if r != self.id
+                   for pid, cell in self._holders.get(r, {}).items() if pid != self.id}
+        if holders:
+            passable = passable_mask(self.known)
+            mine = np.array(wavefront(passable, self.pos, self.width)[0])
+            mine[mine < 0] = self._flat.size
+            for cell in holders.values():
+                theirs = np.array(wavefront(passable, cell, self.width)[0])
+                theirs[theirs < 0] = self._flat.size
+                share &= mine <= theirs
+        self._share_key, self._share = key, share
+        return share
 
     def in_region(self) -> np.ndarray:
         """Flat mask of the agent's assigned region."""
@@ -260,15 +320,18 @@ class ExplorerAgent:
         """Cells of the agents heard this round whose id is smaller (they have the way)."""
         return [p.pos for pid, p in self.peers.items() if pid < self.id]
 
-    def step_towards(self, goal: int, passable: bytearray) -> Move | None:
+    def step_towards(self, goal: int, passable: bytearray,
+                     gain: list[int] | None = None) -> Move | None:
         """One move along a shortest path to ``goal`` over ``passable``; None if unreachable.
+        With ``gain`` (per cell) the path is, of the shortest ones, one with the most gain.
 
         If an agent heard this round stands on the next cell, the agent waits (``STAY``) and
         counts the round as blocked.
         """
         target = bytearray(len(passable))
         target[goal] = 1
-        _, parent, found = wavefront(passable, self.pos, self.width, target, nearest_only=True)
+        _, parent, found = wavefront(passable, self.pos, self.width, target, nearest_only=True,
+                                     gain=gain)
         if not found:
             return None
         path = path_to(parent, self.pos, goal)

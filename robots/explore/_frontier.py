@@ -13,7 +13,7 @@ import numpy as np
 
 from ._agent import STAY, ExplorerAgent, Move
 from ._grid import passable_mask, path_to, wavefront
-from ._sensing import unexplored_in_view, unexplored_seen_from
+from ._sensing import unexplored_in_view
 
 
 def _norm(values: list[float]) -> list[float]:
@@ -53,10 +53,11 @@ class FrontierPolicy:
         stuck = agent.stuck >= 2
         ahead = agent.peer_cells() if stuck else agent.senior_peer_cells()
         passable = passable_mask(agent.known, ahead)
+        self.gain = self.path_gain(agent)
         goal = agent.goal
         if (self.hold_goal and not stuck and goal is not None and cand[goal]
                 and self.keep(agent, goal)):
-            move = agent.step_towards(goal, passable)
+            move = agent.step_towards(goal, passable, self.gain)
             if move is not None:
                 return move
         goal = self.select(agent, cand, passable_mask(agent.known, agent.peer_cells()))
@@ -64,7 +65,7 @@ class FrontierPolicy:
             goal = self.select(agent, cand, passable)
         if goal is not None:
             agent.goal = goal
-            move = agent.step_towards(goal, passable)
+            move = agent.step_towards(goal, passable, self.gain)
             if move is not None:
                 return move
             agent.stuck += 1
@@ -79,9 +80,15 @@ class FrontierPolicy:
             return STAY
         return self.decide(agent)
 
+    gain: list[int] | None = None  # this decision's path gain per cell (``path_gain``)
+
     def keep(self, agent: ExplorerAgent, goal: int) -> bool:
         """Whether a still-unknown goal stays this agent's (overridden by CU-LVP)."""
         return True
+
+    def path_gain(self, agent: ExplorerAgent) -> list[int] | None:
+        """Per cell, what a path gains by crossing it (None: any shortest path will do)."""
+        return None
 
     def select(self, agent: ExplorerAgent, cand: np.ndarray, passable: bytearray) -> int | None:
         """Pick a goal among the candidate cells, or None if none is reachable."""
@@ -187,6 +194,11 @@ class CULVP(FrontierPolicy):
         """Give the goal up if a heard agent with a smaller id holds it too."""
         return not any(p.goal == goal and pid < agent.id for pid, p in agent.peers.items())
 
+    def path_gain(self, agent: ExplorerAgent) -> list[int] | None:
+        """Unex(x, r) of every cell: u_jgr (3) is summed over the path to a frontier, and of
+        the shortest paths the one scored, and walked, is the one that sees the most."""
+        return unexplored_in_view(agent.known, self.reach).ravel().tolist()
+
     def select(self, agent: ExplorerAgent, cand: np.ndarray, passable: bytearray) -> int | None:
         """Nearest frontiers (BFS wavefront), highest utility among ties."""
         held = [p.goal for p in agent.peers.values() if p.goal is not None]
@@ -194,8 +206,10 @@ class CULVP(FrontierPolicy):
         if held and int(cand.sum()) >= len(agent.peers) + 1:
             targets = cand.copy()
             targets[held] = False
+        gain = self.gain if self.gain is not None else self.path_gain(agent)
+        assert gain is not None
         _, parent, found = wavefront(passable, agent.pos, agent.width,
-                                     bytearray(targets.tobytes()), nearest_only=True)
+                                     bytearray(targets.tobytes()), nearest_only=True, gain=gain)
         if not found:
             return None
         if len(found) == 1:
@@ -203,15 +217,7 @@ class CULVP(FrontierPolicy):
         found.sort()
         agents = [agent.pos, *agent.peer_cells()]
         mnm = [float(sum(_manhattan(f, a, agent.width) for a in agents)) for f in found]
-        flat = agent.known.ravel().tolist()
-        seen: dict[int, int] = {}
-
-        def unex(x: int) -> int:
-            if x not in seen:
-                seen[x] = unexplored_seen_from(flat, x, agent.width, self.reach)
-            return seen[x]
-
-        jgr = [float(unex(agent.pos) + sum(unex(x) for x in path_to(parent, agent.pos, f)))
+        jgr = [float(gain[agent.pos] + sum(gain[x] for x in path_to(parent, agent.pos, f)))
                for f in found]
         score = [a + self.lam * b for a, b in zip(_norm(mnm), _norm(jgr), strict=True)]
         return found[int(np.argmax(score))]

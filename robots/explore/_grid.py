@@ -32,16 +32,24 @@ def wavefront(
     width: int,
     targets: bytearray | None = None,
     nearest_only: bool = False,
+    gain: list[int] | None = None,
 ) -> tuple[list[int], list[int], list[int]]:
     """Breadth-first wavefront from flat index ``start`` (section III-C, Fig. 2).
 
     Returns ``(dist, parent, found)``: distances (-1 unreached), BFS parents, and the target
     cells reached. With ``nearest_only`` the search stops after the first level holding a
     target, and ``found`` is that level's targets only (the nearest frontiers).
+
+    With ``gain`` (a value per flat cell) each cell's parent is chosen, among its neighbours
+    one level nearer the start, to maximise the gain summed along the path from the start:
+    ``path_to`` then returns, of all shortest paths to a cell, one with the most gain.
     """
     n = len(passable)
     dist = [-1] * n
     parent = [-1] * n
+    weigh = gain is not None
+    g = gain if gain is not None else []
+    acc = [0] * n if weigh else []  # gain summed along the chosen path
     dist[start] = 0
     level = [start]
     found: list[int] = []
@@ -63,6 +71,11 @@ def wavefront(
                     dist[m] = d
                     parent[m] = c
                     nxt.append(m)
+                    if weigh:
+                        acc[m] = acc[c] + g[m]
+                elif weigh and dist[m] == d and acc[c] + g[m] > acc[m]:
+                    parent[m] = c  # another shortest way in that sees more
+                    acc[m] = acc[c] + g[m]
         level = nxt
     return dist, parent, found
 

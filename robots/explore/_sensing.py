@@ -41,20 +41,3 @@ def unexplored_in_view(known: np.ndarray, reach: int = 2) -> np.ndarray:
             open_ray &= ~_shifted(obstacle, k * dr, k * dc, True)
     return count
 
-
-def unexplored_seen_from(flat: list[int], k: int, width: int, reach: int = 2) -> int:
-    """Unex(x, r) of equation (3) for the one flat cell ``k`` of a map given as a flat list;
-    the same count as :func:`unexplored_in_view`, cheaper when only a few cells are needed.
-    The map's border must be obstacles (rays never leave it)."""
-    count = 0
-    for dr, dc in RAYS:
-        step = dr * width + dc
-        m = k
-        for _ in range(reach):
-            m += step
-            v = flat[m]
-            if v == UNKNOWN:
-                count += 1
-            elif v == OBSTACLE:
-                break
-    return count

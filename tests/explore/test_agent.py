@@ -120,14 +120,88 @@ def test_public_face() -> None:
     assert all(hasattr(explore, name) for name in explore.__all__)
 
 
-def test_unexplored_seen_from_matches_the_array_version() -> None:
-    from robots.explore._sensing import unexplored_seen_from
+def test_unexplored_in_view_counts_each_ray_up_to_its_first_obstacle() -> None:
+    from robots.explore._sensing import RAYS
 
     rng = np.random.default_rng(2)
     known = rng.choice([UNKNOWN, FREE, OBSTACLE], size=(12, 12)).astype(np.int8)
     known[0], known[-1], known[:, 0], known[:, -1] = OBSTACLE, OBSTACLE, OBSTACLE, OBSTACLE
     full = unexplored_in_view(known)
-    flat = known.ravel().tolist()
     for r in range(1, 11):
         for c in range(1, 11):
-            assert unexplored_seen_from(flat, r * 12 + c, 12) == full[r, c]
+            expected = 0
+            for dr, dc in RAYS:  # walk each ray cell by cell
+                for k in (1, 2):
+                    v = known[r + k * dr, c + k * dc]
+                    if v == OBSTACLE:
+                        break
+                    expected += v == UNKNOWN
+            assert full[r, c] == expected
+
+
+def test_a_path_of_the_most_gain_among_the_shortest() -> None:
+    from robots.explore._grid import passable_mask, path_to, wavefront
+
+    known = np.full((5, 6), FREE, dtype=np.int8)
+    known[0], known[-1], known[:, 0], known[:, -1] = OBSTACLE, OBSTACLE, OBSTACLE, OBSTACLE
+    width = 6
+    start, goal = 1 * width + 1, 3 * width + 4
+    gain = [0] * known.size
+    gain[3 * width + 2] = 5  # the bottom-left way in is worth more
+    _, parent, _ = wavefront(passable_mask(known), start, width, gain=gain)
+    path = path_to(parent, start, goal)
+    assert len(path) == 5  # still a shortest path
+    assert 3 * width + 2 in path
+    gain[3 * width + 2], gain[1 * width + 4] = 0, 7  # now the top-right way
+    _, parent, _ = wavefront(passable_mask(known), start, width, gain=gain)
+    path = path_to(parent, start, goal)
+    assert len(path) == 5 and 1 * width + 4 in path
+
+
+def _chain(exchanges: int) -> list[ExplorerAgent]:
+    """Three agents in a corridor, a-b and b-c in range, a-c not; one round of talk."""
+    grid = np.ones((3, 25), dtype=np.int8)
+    grid[1, 1:-1] = 0
+    starts = [(1, 2), (1, 9), (1, 16)]
+    team = make_team("cu-lvp", grid.shape, starts, 1)
+    hears = {0: [1], 1: [0, 2], 2: [1]}  # range 7 cells
+    for a in team:
+        a.observe(seen_cells=visible_cells(grid, a.position), position=a.position)
+    msgs = [msgpack.unpackb(msgpack.packb(a.outgoing_message())) for a in team]
+    for i, a in enumerate(team):
+        a.observe(heard_messages=[msgs[j] for j in hears[i]])
+    for _ in range(exchanges - 1):
+        relays = [msgpack.unpackb(msgpack.packb(a.relay_message())) for a in team]
+        for i, a in enumerate(team):
+            a.hear_relay([relays[j] for j in hears[i]])
+    return team
+
+
+def test_relays_carry_news_along_a_chain_in_one_round() -> None:
+    a, _, c = _chain(exchanges=1)
+    assert c.known[1, 1] == UNKNOWN  # one exchange: c hears b, who knew only itself
+    a, _, c = _chain(exchanges=2)
+    assert c.known[1, 1] == FREE and c.known[1, 3] == FREE  # what a saw, through b
+    assert a.known[1, 18] == FREE  # and back
+    assert c.peers.keys() == {1}  # positions and goals are still those heard directly
+    # nothing new: the next relay of each is empty
+    assert all(m["free"] == b"" for m in (x.relay_message() for x in _chain(3)[::2]))
+
+
+def test_a_helper_takes_the_far_side_of_the_holders_region() -> None:
+    grid = np.ones((3, 25), dtype=np.int8)
+    grid[1, 1:-1] = 0
+    starts = [(1, 3), (1, 21)]  # two regions: columns 1-12 and 13-23
+
+    def helping(holder_at: int) -> np.ndarray:
+        helper, holder = make_team("cu-lvp", grid.shape, starts, 1)
+        helper.observe(seen_cells=visible_cells(grid, (1, 8)), position=(1, 8))
+        holder.observe(seen_cells=visible_cells(grid, (1, holder_at)), position=(1, holder_at))
+        helper.observe(heard_messages=[msgpack.unpackb(msgpack.packb(holder.outgoing_message()))])
+        helper.set_regions({1})  # its own region done, it helps with the holder's
+        return helper.candidates().reshape(grid.shape)[1].nonzero()[0].tolist()
+
+    # holder heard at 19 (it sees 17-21): of the unknown 13-16 and 22-23 only 13 is nearer
+    assert helping(19) == [13]
+    # holder heard at 16: no unknown cell of the region is nearer the helper, so all of them
+    assert helping(16) == [13, 19, 20, 21, 22, 23]
