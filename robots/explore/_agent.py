@@ -220,29 +220,30 @@ class ExplorerAgent:
         region, or, once it is explored, of the regions merged from agents met (section III-B:
         "the primary focus remains on achieving complete coverage within the assigned
         region"). With ``region_choice = "estimate"`` (CU-LVP) only the assigned region: once
-        it is explored, ``switch_region`` picks the next by the work estimated left in it, and
-        while helping there the agent takes the part of it nearer to itself than to the
-        region's holders (``_share_with_holders``), as long as that part has unknown cells."""
+        it is explored, ``switch_region`` picks the next by the work estimated left in it; and
+        of a region shared with other agents, the part nearer to itself than to them
+        (``_share_of_region``), as long as that part has unknown cells."""
         unknown: np.ndarray = self._flat == UNKNOWN
         own: np.ndarray = unknown & self._in_region
         if self._estimate:
-            share = own & self._share_with_holders()
+            share = own & self._share_of_region()
             return share if share.any() else own
         if own.any():
             return own
         merged: np.ndarray = unknown & self._in_merged
         return merged
 
-    def _share_with_holders(self) -> np.ndarray:
-        """For a helper (an agent holding a region not its own): the cells it is nearer to
-        (on its map) than every other agent it last heard holding that region, at the cell
-        it was heard at; everything for an agent in its own region. Helpers thus start on the
-        far side of the region from its holder, not on the near side it has likely explored."""
+    def _share_of_region(self) -> np.ndarray:
+        """The cells this agent is nearer to (on its map) than every other agent it last heard
+        holding the same region, at the cell it was heard at. Agents that share a region (its
+        holder and the helpers that came to it) thus split it, each starting on its own side,
+        rather than all chasing the unknown cells nearest to them, which the others have
+        often explored already."""
         key = (self._round, self.pos, self.regions)
         if self._share is not None and self._share_key == key:
             return self._share
         share = np.ones(self._flat.shape, dtype=bool)
-        holders = {pid: cell for r in self.regions if r != self.id
+        holders = {pid: cell for r in self.regions
                    for pid, cell in self._holders.get(r, {}).items() if pid != self.id}
         if holders:
             passable = passable_mask(self.known)

@@ -188,20 +188,24 @@ def test_relays_carry_news_along_a_chain_in_one_round() -> None:
     assert all(m["free"] == b"" for m in (x.relay_message() for x in _chain(3)[::2]))
 
 
-def test_a_helper_takes_the_far_side_of_the_holders_region() -> None:
+def test_agents_sharing_a_region_split_it() -> None:
     grid = np.ones((3, 25), dtype=np.int8)
     grid[1, 1:-1] = 0
     starts = [(1, 3), (1, 21)]  # two regions: columns 1-12 and 13-23
 
-    def helping(holder_at: int) -> np.ndarray:
+    def shared(holder_at: int) -> tuple[list[int], list[int]]:
         helper, holder = make_team("cu-lvp", grid.shape, starts, 1)
         helper.observe(seen_cells=visible_cells(grid, (1, 8)), position=(1, 8))
         holder.observe(seen_cells=visible_cells(grid, (1, holder_at)), position=(1, holder_at))
-        helper.observe(heard_messages=[msgpack.unpackb(msgpack.packb(holder.outgoing_message()))])
         helper.set_regions({1})  # its own region done, it helps with the holder's
-        return helper.candidates().reshape(grid.shape)[1].nonzero()[0].tolist()
+        messages = [msgpack.unpackb(msgpack.packb(a.outgoing_message())) for a in (helper, holder)]
+        helper.observe(heard_messages=messages[1:])
+        holder.observe(heard_messages=messages[:1])
+        return ([int(k) % 25 for k in helper.candidates().nonzero()[0]],
+                [int(k) % 25 for k in holder.candidates().nonzero()[0]])
 
-    # holder heard at 19 (it sees 17-21): of the unknown 13-16 and 22-23 only 13 is nearer
-    assert helping(19) == [13]
-    # holder heard at 16: no unknown cell of the region is nearer the helper, so all of them
-    assert helping(16) == [13, 19, 20, 21, 22, 23]
+    # the holder, heard at 19, sees 17-21: of the unknown 13-16 and 22-23 only 13 is nearer
+    # the helper at 8; the holder keeps the rest
+    assert shared(19) == ([13], [14, 15, 16, 22, 23])
+    # holder at 16: no unknown cell of the region is nearer the helper, so it takes them all
+    assert shared(16) == ([13, 19, 20, 21, 22, 23], [13, 19, 20, 21, 22, 23])
