@@ -9,10 +9,15 @@ explored cells (the reference implementation's choices). Section IV-B: only the 
 region counts, unknown cells outside it are obstacles for the field; an agent moves to the
 neighbour of largest u, never onto a cell an agent heard this round stands on (anti-collision
 on). When the field gives no pull (region beyond reach of the field), the agent follows the
-wavefront path to its nearest frontier, as the paper's refinement does.
+wavefront path to its nearest frontier, as the paper's refinement does. It does the same, until
+that frontier is explored, when climbing the field has it going back and forth between two
+cells without learning anything (the field changes with the other agents' positions, and a
+team can fall into such a cycle together and stay in it).
 """
 
 from __future__ import annotations
+
+from collections import deque
 
 import numpy as np
 
@@ -52,6 +57,18 @@ class Hedac:
     def __init__(self, alpha: float = 10.0, iterations: int = 100) -> None:
         self.alpha = alpha
         self.iterations = iterations
+        self._trail: deque[tuple[int, int]] = deque(maxlen=4)  # (cell, cells known) per round
+        self._pursue = False  # following the wavefront path out of a cycle
+
+    def _cycling(self, pos: int, explored: int) -> bool:
+        """Whether the last four rounds went a, b, a, b with nothing learnt."""
+        trail = self._trail
+        trail.append((pos, explored))
+        if (len(trail) == 4 and trail[0][0] == trail[2][0] and trail[1][0] == trail[3][0]
+                and trail[0][1] == explored):
+            trail.clear()
+            return True
+        return False
 
     def decide(self, agent: ExplorerAgent) -> Move:
         """Climb the attracting field; fall back to the nearest frontier's wavefront path."""
@@ -60,20 +77,26 @@ class Hedac:
             return STAY
         cand = agent.candidates()
         known = agent.known.ravel()
-        open_ = (known == FREE) | cand
+        explored = int(np.count_nonzero(known != UNKNOWN))
+        if self._cycling(agent.pos, explored):
+            self._pursue, agent.goal = True, None
+        elif self._pursue and agent.goal is not None and not cand[agent.goal]:
+            self._pursue = False  # the frontier it went for is explored: back to the field
         peers = agent.peer_cells()
-        open_[peers] = False
-        explored = float(np.count_nonzero(known != UNKNOWN))
-        u = attracting_field(open_.reshape(agent.shape), (cand * explored).reshape(agent.shape),
-                             self.alpha, self.iterations).ravel()
         w = agent.width
-        best, best_u = -1, 0.0
-        for k in (agent.pos - w, agent.pos + w, agent.pos - 1, agent.pos + 1):
-            if open_[k] and u[k] > best_u:
-                best, best_u = k, float(u[k])
-        if best >= 0:
-            agent.goal = None
-            return agent.move_to(best)
+        if not self._pursue:
+            open_ = (known == FREE) | cand
+            open_[peers] = False
+            u = attracting_field(open_.reshape(agent.shape),
+                                 (cand * float(explored)).reshape(agent.shape),
+                                 self.alpha, self.iterations).ravel()
+            best, best_u = -1, 0.0
+            for k in (agent.pos - w, agent.pos + w, agent.pos - 1, agent.pos + 1):
+                if open_[k] and u[k] > best_u:
+                    best, best_u = k, float(u[k])
+            if best >= 0:
+                agent.goal = None
+                return agent.move_to(best)
         targets = bytearray(cand.tobytes())
         for blocked in (peers, []):
             passable = passable_mask(agent.known, blocked)

@@ -91,3 +91,13 @@ def test_two_agents_meeting_in_corridors_do_not_livelock(run: int, method: str) 
     seed = np.random.SeedSequence([2026, 30, 850, run, 2, list(METHODS).index(method)])
     res = run_trial(maze, 2, method, seed, max_rounds=1500)
     assert res["complete"]
+
+
+def test_hedac_agents_caught_in_a_two_cell_cycle_break_out() -> None:
+    # Experiment seed 2026, p = 0.85, maze 6, 15 agents: with relays all fifteen HEDAC agents
+    # once went back and forth between two cells each, with 19 cells left, until the cap.
+    maze = generate_maze(30, 0.85, np.random.default_rng(np.random.SeedSequence(
+        [2026, 30, 850, 6])), n_starts=20)
+    seed = np.random.SeedSequence([2026, 30, 850, 6, 15, list(METHODS).index("hedac")])
+    res = run_trial(maze, 15, "hedac", seed, max_rounds=400, exchanges=3)
+    assert res["complete"]
