@@ -15,29 +15,24 @@ RAYS: tuple[tuple[int, int], ...] = (
 )
 
 
-def _shifted(a: np.ndarray, dr: int, dc: int, fill: bool) -> np.ndarray:
-    """``out[r, c] = a[r + dr, c + dc]`` with ``fill`` outside the array."""
-    out = np.full(a.shape, fill, dtype=bool)
-    rows, cols = a.shape
-    out[max(0, -dr):rows - max(0, dr), max(0, -dc):cols - max(0, dc)] = a[
-        max(0, dr):rows - max(0, -dr), max(0, dc):cols - max(0, -dc)
-    ]
-    return out
-
-
 def unexplored_in_view(known: np.ndarray, reach: int = 2) -> np.ndarray:
     """For every cell, how many unknown cells its star sensor would cover on this map.
 
     A ray passes unknown and free cells and stops at a known obstacle (which it counts only if
-    unknown, i.e. never), as the reference's ``calculate_utility_jgr`` does.
+    unknown, i.e. never), as the reference's ``calculate_utility_jgr`` does. Beyond the map
+    counts as obstacle.
     """
-    unknown = known == UNKNOWN
-    obstacle = known == OBSTACLE
+    rows, cols = known.shape
+    padded = np.full((rows + 2 * reach, cols + 2 * reach), OBSTACLE, dtype=known.dtype)
+    padded[reach:-reach, reach:-reach] = known
+    unknown = padded == UNKNOWN
+    blocked = padded == OBSTACLE
     count = np.zeros(known.shape, dtype=np.int32)
+    open_ray = np.empty(known.shape, dtype=bool)
     for dr, dc in RAYS:
-        open_ray = np.ones(known.shape, dtype=bool)
+        open_ray[:] = True
         for k in range(1, reach + 1):
-            count += open_ray & _shifted(unknown, k * dr, k * dc, False)
-            open_ray &= ~_shifted(obstacle, k * dr, k * dc, True)
+            r0, c0 = reach + k * dr, reach + k * dc  # the cell k steps along the ray, as views
+            count += open_ray & unknown[r0:r0 + rows, c0:c0 + cols]
+            open_ray &= ~blocked[r0:r0 + rows, c0:c0 + cols]
     return count
-
