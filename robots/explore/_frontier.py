@@ -178,9 +178,10 @@ class CULVP(FrontierPolicy):
 
     utility(f) = N(u_mnm(f)) + λ N(u_jgr(f)), λ = 0.2; u_mnm (2) sums the distances from f to
     every agent known this round (itself included); u_jgr (3) sums Unex(x, r) over the whole
-    wavefront path to f. Goals held by agents in range are excluded while there are at least
-    as many candidates as agents; a goal another agent in range also holds is given up by the
-    agent with the larger id, and a goal explored by anyone is re-planned.
+    wavefront path to f, taking of the shortest paths one that sees the most, which is also
+    the path the agent walks (``path_gain``). Goals held by agents in range are excluded while
+    there are at least as many candidates as agents; a goal another agent in range also holds
+    is given up by the agent with the larger id, and a goal explored by anyone is re-planned.
     """
 
     name = "cu-lvp"
