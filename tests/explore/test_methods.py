@@ -101,3 +101,15 @@ def test_hedac_agents_caught_in_a_two_cell_cycle_break_out() -> None:
     seed = np.random.SeedSequence([2026, 30, 850, 6, 15, list(METHODS).index("hedac")])
     res = run_trial(maze, 15, "hedac", seed, max_rounds=400, exchanges=3)
     assert res["complete"]
+
+
+def test_relays_are_counted_and_can_be_turned_off(capsys) -> None:
+    maze = generate_maze(30, 0.85, np.random.default_rng(3), n_starts=8)
+    one = run_trial(maze, 8, "cu-lvp", np.random.SeedSequence(1), exchanges=1)
+    three = run_trial(maze, 8, "cu-lvp", np.random.SeedSequence(1), exchanges=3)
+    assert one["complete"] and three["complete"]
+    # the relays' bytes are sent on top of the round's broadcasts
+    assert three["comm_sent_kB"] / three["rounds"] > one["comm_sent_kB"] / one["rounds"]
+    bad = _parse("--exchanges", "0", "--no-plots")
+    assert bad.func(bad) == 2
+    assert "--exchanges must be positive" in capsys.readouterr()[1]
