@@ -107,6 +107,12 @@ async def explore_maze(robot: Any, team: Any, method: str = "cu_lvp", seed: int 
     topic = f"{TOPIC}/{team.run}"
     rounds = moves = sent = 0
     inbox: dict[Exchange, dict[str, Any]] = {}
+
+    async def send(data: dict[str, Any]) -> int:
+        """Broadcast to the members in radio range; the bytes of the agent's message."""
+        await robot.node.broadcast(topic, data, range=reach if reach != float("inf") else None,
+                                   reliable=True)
+        return len(pack(data["agent"]))
     # subscribed before the start step: no member broadcasts before every one listens
     async with robot.node.subscribe(topic) as sub, \
             hw.clock.owned(at=await start_round(hw, team)):
@@ -118,20 +124,12 @@ async def explore_maze(robot: Any, team: Any, method: str = "cu_lvp", seed: int 
             if hw.clock.ended() or (max_rounds and rounds >= max_rounds):
                 break
             now = hw.clock.now()
-            message = agent.outgoing_message()
-            sent += len(pack(message))
-            await robot.node.broadcast(topic, {"round": now, "agent": message},
-                                       range=reach if reach != float("inf") else None,
-                                       reliable=True)
+            sent += await send({"round": now, "agent": agent.outgoing_message()})
             hearers = set(radio.in_range())
             heard = await _hear(robot, sub, inbox, (now, 0), hearers)
             agent.observe(heard_messages=sorted(heard.values(), key=lambda m: m["id"]))
             for k in range(1, exchanges if hearers else 1):
-                relay = agent.relay_message()
-                sent += len(pack(relay))
-                await robot.node.broadcast(topic, {"round": now, "exchange": k, "agent": relay},
-                                           range=reach if reach != float("inf") else None,
-                                           reliable=True)
+                sent += await send({"round": now, "exchange": k, "agent": agent.relay_message()})
                 heard = await _hear(robot, sub, inbox, (now, k), hearers)
                 agent.hear_relay(sorted(heard.values(), key=lambda m: m["id"]))
             move = agent.decide()

@@ -20,13 +20,14 @@ import secrets
 import sys
 import time
 from collections import defaultdict
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import msgpack
 import numpy as np
 
-from robots.explore import EXCHANGES, METHODS, make_team
+from robots.explore import EXCHANGES, METHODS, ExplorerAgent, make_team
 from sim_hw.maze import FREE, Maze, MazeFileError, MazeWorld, generate_maze, load_maze
 
 AGENT_COUNTS = (1, 2, 4, 6, 8, 10, 15, 20)
@@ -84,6 +85,28 @@ def run_trial(
     cap = max_rounds if max_rounds is not None else 5 * rows * cols  # a stuck team is reported
     rounds = cost = sent = heard_bytes = paper_bits = 0
     busy = 0.0
+
+    def exchange(message: Callable[[ExplorerAgent], dict[str, Any]],
+                 alone_too: bool) -> list[list[dict[str, Any]]]:
+        """Every agent's message, packed with msgpack and delivered decoded to the agents in
+        its range; an agent with nobody in range sends it only if ``alone_too``."""
+        nonlocal sent, heard_bytes, busy
+        inbox: list[list[dict[str, Any]]] = [[] for _ in team]
+        for i, agent in enumerate(team):
+            hearers = world.neighbours(i)
+            if not hearers and not alone_too:
+                continue
+            t0 = time.perf_counter()
+            packed = msgpack.packb(message(agent))
+            busy += time.perf_counter() - t0
+            sent += len(packed)
+            if hearers:
+                heard_bytes += len(packed)
+                msg = msgpack.unpackb(packed)
+                for j in hearers:
+                    inbox[j].append(msg)
+        return inbox
+
     while True:
         for i, agent in enumerate(team):
             seen = world.sense(i)
@@ -96,39 +119,15 @@ def run_trial(
                     covered += 1
         if covered >= n_target or rounds >= cap:
             break
-        inbox: list[list[dict[str, Any]]] = [[] for _ in team]
-        pairs = 0
-        for i, agent in enumerate(team):
-            t0 = time.perf_counter()
-            packed = msgpack.packb(agent.outgoing_message())
-            busy += time.perf_counter() - t0
-            sent += len(packed)
-            hearers = world.neighbours(i)
-            if hearers:
-                heard_bytes += len(packed)
-                msg = msgpack.unpackb(packed)
-                for j in hearers:
-                    inbox[j].append(msg)
-                    pairs += j > i
+        inbox = exchange(lambda agent: agent.outgoing_message(), alone_too=True)
+        pairs = sum(j > i for i in range(len(team)) for j in world.neighbours(i))
         paper_bits += pairs * 4 * rows * cols  # eq. (8) per communicating pair
         for i, agent in enumerate(team):
             t0 = time.perf_counter()
             agent.observe(heard_messages=inbox[i])
             busy += time.perf_counter() - t0
         for _ in range(exchanges - 1):  # relays, among the agents that heard each other
-            relays: list[list[dict[str, Any]]] = [[] for _ in team]
-            for i, agent in enumerate(team):
-                hearers = world.neighbours(i)
-                if not hearers:
-                    continue
-                t0 = time.perf_counter()
-                packed = msgpack.packb(agent.relay_message())
-                busy += time.perf_counter() - t0
-                sent += len(packed)
-                heard_bytes += len(packed)
-                msg = msgpack.unpackb(packed)
-                for j in hearers:
-                    relays[j].append(msg)
+            relays = exchange(lambda agent: agent.relay_message(), alone_too=False)
             for i, agent in enumerate(team):
                 if relays[i]:
                     t0 = time.perf_counter()

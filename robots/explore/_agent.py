@@ -86,8 +86,8 @@ class ExplorerAgent:
         self._round = 0  # rounds heard so far (``observe(heard_messages=...)`` calls)
         self._last_heard = np.zeros(len(starts))  # round an agent holding region r was heard
         self._holders: dict[int, dict[int, int]] = {}  # region -> {agent: cell last heard at}
-        self._share_key: tuple[int, int, frozenset[int]] | None = None
-        self._share: np.ndarray | None = None
+        self._share: np.ndarray | None = None  # ``_share_of_region`` until the map, the
+        # agent's cell, its regions or the agents heard change
         # Section III-B: regions from the initial map, where all unknown space counts as free.
         self.region_of = voronoi_partition(self.known != OBSTACLE, list(starts)).ravel()
         self.regions: frozenset[int] = frozenset({agent_id})  # assigned: explored first
@@ -127,6 +127,7 @@ class ExplorerAgent:
         Pass ``heard_messages`` (an empty list if nobody was heard) once per round: it replaces
         the peers heard last round.
         """
+        self._share = None
         if position is not None:
             new = self._index(position)
             self.stuck = 0 if new != self.pos else self.stuck
@@ -203,6 +204,7 @@ class ExplorerAgent:
     def hear_relay(self, messages: list[dict[str, Any]]) -> None:
         """Merge the map cells of the relay messages heard (position and goals stay as heard
         in the round's first exchange)."""
+        self._share = None
         for msg in messages:
             if int(msg["id"]) != self.id:
                 self._merge_cells(msg)
@@ -211,6 +213,7 @@ class ExplorerAgent:
     def set_regions(self, regions: set[int] | frozenset[int]) -> None:
         """Assign ``regions`` (Voronoi region ids) to this agent; forget merged ones."""
         self.regions = frozenset(regions)
+        self._share = None
         self._in_region = np.isin(self.region_of, list(self.regions))
         self.merged = frozenset()
         self._in_merged[:] = False
@@ -239,8 +242,7 @@ class ExplorerAgent:
         holder and the helpers that came to it) thus split it, each starting on its own side,
         rather than all chasing the unknown cells nearest to them, which the others have
         often explored already."""
-        key = (self._round, self.pos, self.regions)
-        if self._share is not None and self._share_key == key:
+        if self._share is not None:
             return self._share
         share = np.ones(self._flat.shape, dtype=bool)
         holders = {pid: cell for r in self.regions
@@ -253,7 +255,7 @@ class ExplorerAgent:
                 theirs = np.array(wavefront(passable, cell, self.width)[0])
                 theirs[theirs < 0] = self._flat.size
                 share &= mine <= theirs
-        self._share_key, self._share = key, share
+        self._share = share
         return share
 
     def in_region(self) -> np.ndarray:
