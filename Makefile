@@ -16,6 +16,7 @@ demo: $(STAMP)
 
 test: $(STAMP)
 	$(PY) -m ruff check mover robots sim_hw programs tests bench
+	$(PY) -m ruff format --check mover robots sim_hw programs tests bench
 	$(PY) -m mypy
 	$(PY) -m pytest -q
 

@@ -44,8 +44,9 @@ HEAR_TIMEOUT = 10.0
 Exchange = tuple[int, int]  # (round, exchange within the round)
 
 
-async def _hear(robot: Any, sub: Any, inbox: dict[Exchange, dict[str, Any]], round: Exchange,
-                expected: set[str]) -> dict[str, dict[str, Any]]:
+async def _hear(
+    robot: Any, sub: Any, inbox: dict[Exchange, dict[str, Any]], round: Exchange, expected: set[str]
+) -> dict[str, dict[str, Any]]:
     """The broadcasts of exchange ``round`` from ``expected``; later ones are kept for theirs."""
     node = robot.node
     got = inbox.pop(round, {})
@@ -76,10 +77,17 @@ def map_text(agent: ExplorerAgent) -> str:
     return "\n".join("".join(row) for row in rows) + "\n"
 
 
-async def explore_maze(robot: Any, team: Any, method: str = "cu_lvp", seed: int = 0,
-                       starts: list[list[int]] | None = None,
-                       shape: list[int] | None = None, max_rounds: int = 0,
-                       snapshot_dir: str = "", exchanges: int = EXCHANGES) -> dict[str, Any]:
+async def explore_maze(
+    robot: Any,
+    team: Any,
+    method: str = "cu_lvp",
+    seed: int = 0,
+    starts: list[list[int]] | None = None,
+    shape: list[int] | None = None,
+    max_rounds: int = 0,
+    snapshot_dir: str = "",
+    exchanges: int = EXCHANGES,
+) -> dict[str, Any]:
     """Explore the maze with ``method`` (cu_lvp, nf, cu_mnm, cu_jgr, cu_bso, hedac).
 
     ``starts`` are every member's start cell in member-name order and ``shape`` the maze's
@@ -99,8 +107,9 @@ async def explore_maze(robot: Any, team: Any, method: str = "cu_lvp", seed: int 
     i = member_index(robot, team)
     cells = [(int(r), int(c)) for r, c in starts]
     rng = np.random.default_rng(np.random.SeedSequence(seed).spawn(n)[i])
-    agent = ExplorerAgent(i, (int(shape[0]), int(shape[1])), cells,
-                          make_policy(method.replace("_", "-")), rng)
+    agent = ExplorerAgent(
+        i, (int(shape[0]), int(shape[1])), cells, make_policy(method.replace("_", "-")), rng
+    )
     radio = hw.radio
     assert radio is not None, "maze exploration needs a radio"
     reach = radio.range + 2  # the medium decides who hears; moving one cell must not lose it
@@ -110,17 +119,20 @@ async def explore_maze(robot: Any, team: Any, method: str = "cu_lvp", seed: int 
 
     async def send(data: dict[str, Any]) -> int:
         """Broadcast to the members in radio range; the bytes of the agent's message."""
-        await robot.node.broadcast(topic, data, range=reach if reach != float("inf") else None,
-                                   reliable=True)
+        await robot.node.broadcast(
+            topic, data, range=reach if reach != float("inf") else None, reliable=True
+        )
         return len(pack(data["agent"]))
+
     # subscribed before the start step: no member broadcasts before every one listens
-    async with robot.node.subscribe(topic) as sub, \
-            hw.clock.owned(at=await start_round(hw, team)):
+    async with robot.node.subscribe(topic) as sub, hw.clock.owned(at=await start_round(hw, team)):
         while True:
             dr, dc, _ = hw.odometry.pose()
             r, c = cells[i][0] + int(dr), cells[i][1] + int(dc)
-            agent.observe(seen_cells=[(r + s.d_row, c + s.d_col, int(s.obstacle))
-                                      for s in hw.senses.rays()], position=(r, c))
+            agent.observe(
+                seen_cells=[(r + s.d_row, c + s.d_col, int(s.obstacle)) for s in hw.senses.rays()],
+                position=(r, c),
+            )
             if hw.clock.ended() or (max_rounds and rounds >= max_rounds):
                 break
             now = hw.clock.now()
@@ -141,6 +153,11 @@ async def explore_maze(robot: Any, team: Any, method: str = "cu_lvp", seed: int 
         path = Path(snapshot_dir) / f"{robot.id}.txt"
         path.parent.mkdir(parents=True, exist_ok=True)
         await asyncio.to_thread(path.write_text, map_text(agent))
-    return {"rounds": rounds, "moves": moves, "index": i, "sent_bytes": sent,
-            "known": int(np.count_nonzero(agent.known != UNKNOWN)),
-            "finished": hw.clock.ended()}
+    return {
+        "rounds": rounds,
+        "moves": moves,
+        "index": i,
+        "sent_bytes": sent,
+        "known": int(np.count_nonzero(agent.known != UNKNOWN)),
+        "finished": hw.clock.ended(),
+    }

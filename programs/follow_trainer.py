@@ -20,9 +20,13 @@ from robots import Robot
 from robots.library import follow, goto_point, snapshot
 
 
-async def follow_trainer(robot: Robot, team: RunTeam, trainer: str,
-                         places: dict[str, list[float]] | None = None,
-                         dataset: str = "trainee.jsonl") -> dict[str, Any]:
+async def follow_trainer(
+    robot: Robot,
+    team: RunTeam,
+    trainer: str,
+    places: dict[str, list[float]] | None = None,
+    dataset: str = "trainee.jsonl",
+) -> dict[str, Any]:
     """Lead (trainer) or follow and record (trainees) at every labelled place (section 5).
 
     ``places`` (label → [x, y] in the trainer's odometry frame) is read on the trainer only;

@@ -35,6 +35,7 @@ METHODS = ("cmarking", "marking", "ants")
 async def start_round(hw: GridHardware, team: Any) -> int:
     """Agree with the team on the world round at which every member starts (one ``and``
     step): a little after the latest round any member has seen."""
+
     async def now() -> int:
         return hw.clock.now()
 
@@ -50,18 +51,33 @@ def member_index(robot: Any, team: Any) -> int:
 def perception(hw: GridHardware) -> Perception:
     """The marking agents' perception: the cell here and the free 4-neighbours."""
     h = hw.senses.here()
-    return Perception(h.value, h.colour, h.resource, h.base, tuple(
-        Neighbour(n.direction, n.value, n.colour, n.resource, n.base)
-        for n in hw.senses.around() if n.state != OBSTACLE and n.direction < 4))
+    return Perception(
+        h.value,
+        h.colour,
+        h.resource,
+        h.base,
+        tuple(
+            Neighbour(n.direction, n.value, n.colour, n.resource, n.base)
+            for n in hw.senses.around()
+            if n.state != OBSTACLE and n.direction < 4
+        ),
+    )
 
 
 def ant_perception(hw: GridHardware) -> AntPerception:
     """The ants' perception: pheromone here and around, resources, the nest compass."""
     h = hw.senses.here()
-    return AntPerception(h.pheromone, h.resource, h.base, tuple(
-        AntNeighbour(n.direction, n.pheromone, n.resource, n.base)
-        for n in hw.senses.around() if n.state != OBSTACLE and n.direction < 4),
-        hw.senses.compass())
+    return AntPerception(
+        h.pheromone,
+        h.resource,
+        h.base,
+        tuple(
+            AntNeighbour(n.direction, n.pheromone, n.resource, n.base)
+            for n in hw.senses.around()
+            if n.state != OBSTACLE and n.direction < 4
+        ),
+        hw.senses.compass(),
+    )
 
 
 def act(hw: GridHardware, a: Action) -> None:
@@ -76,8 +92,14 @@ def act(hw: GridHardware, a: Action) -> None:
     hw.drive.move(a.move)
 
 
-async def foraging(robot: Any, team: Any, method: str = "cmarking", seed: int | list[int] = 0,
-                   q_max: int = 100, max_rounds: int = 0) -> dict[str, Any]:
+async def foraging(
+    robot: Any,
+    team: Any,
+    method: str = "cmarking",
+    seed: int | list[int] = 0,
+    q_max: int = 100,
+    max_rounds: int = 0,
+) -> dict[str, Any]:
     """Forage with ``method`` until the world says the resources are exhausted.
 
     Agent ``i`` (the ``i``-th member in name order) draws from the ``i``-th generator spawned
@@ -88,11 +110,17 @@ async def foraging(robot: Any, team: Any, method: str = "cmarking", seed: int | 
     if method not in METHODS:
         raise ValueError(f"unknown method {method!r}; choose from {', '.join(METHODS)}")
     hw: GridHardware = robot.hw
-    rng = np.random.default_rng(np.random.SeedSequence(seed)).spawn(
-        len(team.members))[member_index(robot, team)]
+    rng = np.random.default_rng(np.random.SeedSequence(seed)).spawn(len(team.members))[
+        member_index(robot, team)
+    ]
     ants = method == "ants"
-    agent: Any = (AntAgent(rng, q_max) if ants else CMarkingAgent(rng, q_max)
-                  if method == "cmarking" else ForagingMarkingAgent(rng, q_max))
+    agent: Any = (
+        AntAgent(rng, q_max)
+        if ants
+        else CMarkingAgent(rng, q_max)
+        if method == "cmarking"
+        else ForagingMarkingAgent(rng, q_max)
+    )
     sense = ant_perception if ants else perception
     rounds = delivered = moves = 0
     async with hw.clock.owned(at=await start_round(hw, team)):
@@ -105,5 +133,4 @@ async def foraging(robot: Any, team: Any, method: str = "cmarking", seed: int | 
                 delivered += carried
             moves += hw.drive.moved()
             rounds += 1
-    return {"rounds": rounds, "delivered": delivered, "moves": moves,
-            "finished": hw.clock.ended()}
+    return {"rounds": rounds, "delivered": delivered, "moves": moves, "finished": hw.clock.ended()}

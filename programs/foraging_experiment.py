@@ -109,6 +109,7 @@ def run_trial(
             CMarkingAgent(r, setup.q_max, not literal, forget_at_base, colour_source) for r in rngs
         ]
     step = world.step
+
     def done() -> bool:
         return bool(world.all_delivered if until == "delivered" else world.exhausted)
 

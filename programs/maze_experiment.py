@@ -70,8 +70,12 @@ def observable(grid: np.ndarray, starts: list[tuple[int, int]], reach: int = 2) 
 
 
 def run_trial(
-    maze: Maze, n_agents: int, method: str, seed: np.random.SeedSequence,
-    max_rounds: int | None = None, exchanges: int = EXCHANGES,
+    maze: Maze,
+    n_agents: int,
+    method: str,
+    seed: np.random.SeedSequence,
+    max_rounds: int | None = None,
+    exchanges: int = EXCHANGES,
 ) -> dict[str, Any]:
     """One seeded exploration run; returns its metrics (section IV-C). ``exchanges`` is the
     number of map exchanges per round (:data:`robots.explore.EXCHANGES`; 1: the paper's)."""
@@ -86,8 +90,9 @@ def run_trial(
     rounds = cost = sent = heard_bytes = paper_bits = 0
     busy = 0.0
 
-    def exchange(message: Callable[[ExplorerAgent], dict[str, Any]],
-                 alone_too: bool) -> list[list[dict[str, Any]]]:
+    def exchange(
+        message: Callable[[ExplorerAgent], dict[str, Any]], alone_too: bool
+    ) -> list[list[dict[str, Any]]]:
         """Every agent's message, packed with msgpack and delivered decoded to the agents in
         its range; an agent with nobody in range sends it only if ``alone_too``."""
         nonlocal sent, heard_bytes, busy
@@ -139,12 +144,23 @@ def run_trial(
             busy += time.perf_counter() - t0
             cost += world.move(i, move)
         rounds += 1
-    return _metrics(maze, team, rounds, cost, sent, heard_bytes, paper_bits, busy,
-                    covered >= n_target, n_target)
+    return _metrics(
+        maze, team, rounds, cost, sent, heard_bytes, paper_bits, busy, covered >= n_target, n_target
+    )
 
 
-def _metrics(maze: Maze, team: list[Any], rounds: int, cost: int, sent: int, heard: int,
-             paper_bits: int, busy: float, complete: bool, n_target: int) -> dict[str, Any]:
+def _metrics(
+    maze: Maze,
+    team: list[Any],
+    rounds: int,
+    cost: int,
+    sent: int,
+    heard: int,
+    paper_bits: int,
+    busy: float,
+    complete: bool,
+    n_target: int,
+) -> dict[str, Any]:
     union = np.full(maze.shape, -1, dtype=np.int8)
     for agent in team:
         unknown = union == -1
@@ -185,20 +201,34 @@ def trials(args: argparse.Namespace) -> list[dict[str, Any]]:
         plan = [(math.nan, run, args.maze_data) for run in range(args.runs)]
     else:
         plan = [(p, run, None) for p in args.p for run in range(args.runs)]
-    total = sum(len(args.agents) * sum(1 for m in methods if _runs_for(args, m) > run)
-                for _, run, _ in plan)
+    total = sum(
+        len(args.agents) * sum(1 for m in methods if _runs_for(args, m) > run) for _, run, _ in plan
+    )
     done = 0
     start = time.monotonic()
     for p, run, given in plan:
-        maze = given if given is not None else generate_maze(
-            args.size, p, np.random.default_rng(_seq(args.seed, args.size, round(p * 1000), run)),
-            n_starts=max(args.agents))
+        maze = (
+            given
+            if given is not None
+            else generate_maze(
+                args.size,
+                p,
+                np.random.default_rng(_seq(args.seed, args.size, round(p * 1000), run)),
+                n_starts=max(args.agents),
+            )
+        )
         for n in args.agents:
             for m in methods:
                 if run >= _runs_for(args, m):
                     continue
-                key = (args.seed, args.size, round(p * 1000) if p == p else 0, run, n,
-                       list(METHODS).index(m))
+                key = (
+                    args.seed,
+                    args.size,
+                    round(p * 1000) if p == p else 0,
+                    run,
+                    n,
+                    list(METHODS).index(m),
+                )
                 rec = run_trial(maze, n, m, _seq(*key), exchanges=args.exchanges)
                 rec.update(method=m, agents=n, p=None if p != p else p, run=run)
                 records.append(rec)
@@ -217,8 +247,9 @@ def _progress(done: int, total: int, start: float, what: str) -> None:
     fill = int(width * done / max(total, 1))
     rate = (time.monotonic() - start) / max(done, 1)
     eta = rate * (total - done)
-    sys.stderr.write(f"\r[{'#' * fill}{'.' * (width - fill)}] {done}/{total} "
-                     f"eta {eta:5.0f}s  {what:<32}")
+    sys.stderr.write(
+        f"\r[{'#' * fill}{'.' * (width - fill)}] {done}/{total} eta {eta:5.0f}s  {what:<32}"
+    )
     sys.stderr.flush()
 
 
@@ -259,8 +290,9 @@ def _fmt(vals: list[float]) -> str:
     return f"{mean:.{digits}f} ± {std:.{digits}f}"
 
 
-def composite(records: list[dict[str, Any]], methods: list[str],
-              agents: list[int]) -> dict[Any, dict[str, dict[int, float]]]:
+def composite(
+    records: list[dict[str, Any]], methods: list[str], agents: list[int]
+) -> dict[Any, dict[str, dict[int, float]]]:
     """Section V-B: per agent count, min-max normalise each metric's means over the methods,
     rank the methods (best gets the most points, ties share), and sum the ranks (weights 1)."""
     groups = _group(records)
@@ -289,18 +321,27 @@ def composite_text(scores: dict[Any, dict[str, dict[int, float]]], agents: list[
     for p, per in sorted(scores.items(), key=lambda kv: -1 if kv[0] is None else -kv[0]):
         where = "given maze" if p is None else f"obstacle probability {p:g}"
         out.append(f"\ncomposite index (section V-B, higher is better) — {where}")
-        out.append(f"{'method':<8} " + " ".join(f"{'n=' + str(n):>6}" for n in agents)
-                   + f" {'total':>7}")
+        out.append(
+            f"{'method':<8} " + " ".join(f"{'n=' + str(n):>6}" for n in agents) + f" {'total':>7}"
+        )
         totals = {m: sum(v.values()) for m, v in per.items()}
         for m in sorted(per, key=lambda m: -totals[m]):
-            out.append(f"{m:<8} " + " ".join(f"{per[m].get(n, math.nan):6.1f}" for n in agents)
-                       + f" {totals[m]:7.1f}")
+            out.append(
+                f"{m:<8} "
+                + " ".join(f"{per[m].get(n, math.nan):6.1f}" for n in agents)
+                + f" {totals[m]:7.1f}"
+            )
         out.append("ranking: " + " > ".join(sorted(per, key=lambda m: -totals[m])))
     return "\n".join(out)
 
 
-def plots(records: list[dict[str, Any]], scores: dict[Any, dict[str, dict[int, float]]],
-          methods: list[str], agents: list[int], out: Path) -> list[Path]:
+def plots(
+    records: list[dict[str, Any]],
+    scores: dict[Any, dict[str, dict[int, float]]],
+    methods: list[str],
+    agents: list[int],
+    out: Path,
+) -> list[Path]:
     """Figures like the paper's Fig. 8 (metrics vs agents) and Fig. 9 (composite index)."""
     import matplotlib
 
@@ -311,8 +352,9 @@ def plots(records: list[dict[str, Any]], scores: dict[Any, dict[str, dict[int, f
     groups = _group(records)
     ps = sorted({r["p"] for r in records}, key=lambda v: -1 if v is None else -v)
     shown = [m for m in METRICS if m[0] != "quality"]
-    fig, axes = plt.subplots(len(shown), len(ps), figsize=(5 * len(ps), 2.6 * len(shown)),
-                             squeeze=False)
+    fig, axes = plt.subplots(
+        len(shown), len(ps), figsize=(5 * len(ps), 2.6 * len(shown)), squeeze=False
+    )
     for col, p in enumerate(ps):
         for row, (key, label, _) in enumerate(shown):
             ax = axes[row][col]
@@ -354,40 +396,72 @@ def _csv(kind: type, choices: Any = None) -> Any:
             bad = [i for i in items if i not in choices]
             if bad:
                 raise argparse.ArgumentTypeError(
-                    f"unknown {bad[0]!r}; choose from {', '.join(map(str, choices))}")
+                    f"unknown {bad[0]!r}; choose from {', '.join(map(str, choices))}"
+                )
         if not items:
             raise argparse.ArgumentTypeError("empty list")
         return items
+
     return parse
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Add the ``maze`` experiment runner."""
     parser = sub.add_parser(
-        "maze", help="CU-LVP and baselines on seeded mazes (Linardakis et al., IV-V)",
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+        "maze",
+        help="CU-LVP and baselines on seeded mazes (Linardakis et al., IV-V)",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     parser.add_argument("--runs", type=int, default=100, help="mazes per cell (default 100)")
-    parser.add_argument("--hedac-runs", type=int, default=None,
-                        help="fewer runs for HEDAC, the slow method (default: --runs)")
+    parser.add_argument(
+        "--hedac-runs",
+        type=int,
+        default=None,
+        help="fewer runs for HEDAC, the slow method (default: --runs)",
+    )
     parser.add_argument("--seed", type=int, default=None, help="master seed (default: random)")
-    parser.add_argument("--methods", type=_csv(str, list(METHODS)), default=list(METHODS),
-                        help=f"comma list of {', '.join(METHODS)}")
-    parser.add_argument("--agents", type=_csv(int), default=list(AGENT_COUNTS),
-                        help="comma list of agent counts (default 1,2,4,6,8,10,15,20)")
+    parser.add_argument(
+        "--methods",
+        type=_csv(str, list(METHODS)),
+        default=list(METHODS),
+        help=f"comma list of {', '.join(METHODS)}",
+    )
+    parser.add_argument(
+        "--agents",
+        type=_csv(int),
+        default=list(AGENT_COUNTS),
+        help="comma list of agent counts (default 1,2,4,6,8,10,15,20)",
+    )
     parser.add_argument("--size", type=int, default=30, help="nominal maze size (default 30)")
-    parser.add_argument("--p", type=_csv(float), default=list(PROBABILITIES),
-                        help="comma list of obstacle probabilities (default 0.85,0.15)")
-    parser.add_argument("--exchanges", type=int, default=EXCHANGES,
-                        help=f"map exchanges per round (default {EXCHANGES}: two relay hops;"
-                             " 1: the paper's single exchange)")
+    parser.add_argument(
+        "--p",
+        type=_csv(float),
+        default=list(PROBABILITIES),
+        help="comma list of obstacle probabilities (default 0.85,0.15)",
+    )
+    parser.add_argument(
+        "--exchanges",
+        type=int,
+        default=EXCHANGES,
+        help=f"map exchanges per round (default {EXCHANGES}: two relay hops;"
+        " 1: the paper's single exchange)",
+    )
     parser.add_argument("--maze", type=Path, default=None, help="run on this maze JSON file")
     parser.add_argument("--out", type=Path, default=Path("out"), help="plot directory")
     parser.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
-    parser.add_argument("--load", type=Path, action="append", default=[], metavar="FILE",
-                        help="tabulate the runs saved by earlier --json runs instead of running"
-                             " (repeatable; the last line of each file is read)")
-    parser.add_argument("--json", action="store_true",
-                        help="end with one JSON line holding every run's figures")
+    parser.add_argument(
+        "--load",
+        type=Path,
+        action="append",
+        default=[],
+        metavar="FILE",
+        help="tabulate the runs saved by earlier --json runs instead of running"
+        " (repeatable; the last line of each file is read)",
+    )
+    parser.add_argument(
+        "--json", action="store_true", help="end with one JSON line holding every run's figures"
+    )
     parser.set_defaults(func=run)
 
 
@@ -408,16 +482,21 @@ def run(args: argparse.Namespace) -> int:
             print(f"error: {exc}", file=sys.stderr)
             return 2
         if max(args.agents) > len(args.maze_data.starts):
-            print(f"error: {args.maze} has {len(args.maze_data.starts)} starts, "
-                  f"{max(args.agents)} agents asked", file=sys.stderr)
+            print(
+                f"error: {args.maze} has {len(args.maze_data.starts)} starts, "
+                f"{max(args.agents)} agents asked",
+                file=sys.stderr,
+            )
             return 2
     if args.load:
         return _report_saved(args)
     print(f"seed: {args.seed}")
-    print(f"methods: {','.join(args.methods)}  agents: {','.join(map(str, args.agents))}  "
-          f"runs: {args.runs} (hedac {min(args.runs, args.hedac_runs)})  "
-          + (f"maze: {args.maze}" if args.maze else f"size: {args.size}  p: {args.p}")
-          + f"  exchanges: {args.exchanges}")
+    print(
+        f"methods: {','.join(args.methods)}  agents: {','.join(map(str, args.agents))}  "
+        f"runs: {args.runs} (hedac {min(args.runs, args.hedac_runs)})  "
+        + (f"maze: {args.maze}" if args.maze else f"size: {args.size}  p: {args.p}")
+        + f"  exchanges: {args.exchanges}"
+    )
     records = trials(args)
     print(tables(records, args.methods, args.agents))
     scores = composite(records, args.methods, args.agents)
@@ -439,8 +518,9 @@ def _report_saved(args: argparse.Namespace) -> int:
             print(f"error: {path}: no JSON line of runs: {exc}", file=sys.stderr)
             return 2
         print(f"loaded {path}: seed {data['seed']}, {len(data['runs'])} runs")
-        records.extend(r for r in data["runs"]
-                       if r["method"] in args.methods and r["agents"] in args.agents)
+        records.extend(
+            r for r in data["runs"] if r["method"] in args.methods and r["agents"] in args.agents
+        )
     methods = [m for m in args.methods if any(r["method"] == m for r in records)]
     agents = [n for n in args.agents if any(r["agents"] == n for r in records)]
     print(tables(records, methods, agents))

@@ -26,9 +26,14 @@ from robots.library import (
 )
 
 
-async def search_and_rescue(robot: Robot, team: RunTeam, path: list[list[float]] | None = None,
-                            width: float = 1.2, recognise: str = "box",
-                            seed: int = 0) -> dict[str, Any]:
+async def search_and_rescue(
+    robot: Robot,
+    team: RunTeam,
+    path: list[list[float]] | None = None,
+    width: float = 1.2,
+    recognise: str = "box",
+    seed: int = 0,
+) -> dict[str, Any]:
     """Find an object, gather at it, move it along ``path`` (default: 3 m along +x).
 
     ``width`` is the object's width across the path (where the robots stand along its rear
@@ -44,10 +49,21 @@ async def search_and_rescue(robot: Robot, team: RunTeam, path: list[list[float]]
         role, lateral = stations(won.winner, team.members, width)[team.me]
         await team.report("found", winner=won.winner, object=found.object_id)
         await team.report("gathering", role=role)
-        await team.distributed_and(lambda: goto_object(
-            robot, found.location, plan.heading(), lateral, object_id=found.object_id))
+        await team.distributed_and(
+            lambda: goto_object(
+                robot, found.location, plan.heading(), lateral, object_id=found.object_id
+            )
+        )
         await team.report("pushing", role=role)
-        moved = await (pusher(robot, plan, object_id=found.object_id) if role == "pusher"
-                       else steerer(robot, plan, lateral, object_id=found.object_id))
-    return {"winner": won.winner, "object": found.object_id, "role": role,
-            "location": list(found.location), "moved": moved["moved"]}
+        moved = await (
+            pusher(robot, plan, object_id=found.object_id)
+            if role == "pusher"
+            else steerer(robot, plan, lateral, object_id=found.object_id)
+        )
+    return {
+        "winner": won.winner,
+        "object": found.object_id,
+        "role": role,
+        "location": list(found.location),
+        "moved": moved["moved"],
+    }

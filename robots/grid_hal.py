@@ -48,7 +48,14 @@ FREE, OBSTACLE, OCCUPIED = 0, 1, 2
 
 #: (d_row, d_col) of each direction: N, E, S, W, then NE, SE, SW, NW.
 OFFSETS: tuple[tuple[int, int], ...] = (
-    (-1, 0), (0, 1), (1, 0), (0, -1), (-1, 1), (1, 1), (1, -1), (-1, -1),
+    (-1, 0),
+    (0, 1),
+    (1, 0),
+    (0, -1),
+    (-1, 1),
+    (1, 1),
+    (1, -1),
+    (-1, -1),
 )
 
 

@@ -63,9 +63,7 @@ def _poly_box(
     return pymunk.Poly(body, pts, transform=move @ rot, radius=0.0)
 
 
-def add_obstacle(
-    space: pymunk.Space, spec: ObstacleSpec, category: int = CAT_WALL
-) -> pymunk.Shape:
+def add_obstacle(space: pymunk.Space, spec: ObstacleSpec, category: int = CAT_WALL) -> pymunk.Shape:
     """A static shape for an obstacle spec."""
     body = space.static_body
     shape: pymunk.Shape

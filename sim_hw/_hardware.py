@@ -283,9 +283,7 @@ async def in_process(server: Any, robot_id: str, spec: dict[str, Any] | None = N
     return SimHardware(robot_id, joined["spec"], joined["readings"], exchange).hardware()
 
 
-def world_caller(
-    node: Any, world: str, call_timeout: float
-) -> Callable[..., Awaitable[Any]]:
+def world_caller(node: Any, world: str, call_timeout: float) -> Callable[..., Awaitable[Any]]:
     """``call(procedure, *args)`` on the world process, asked again while it looks lost.
 
     The world may look lost for a moment when the machine is overloaded (a missed lease);

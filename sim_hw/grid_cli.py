@@ -33,32 +33,68 @@ log = logging.getLogger("sim_hw.grid_cli")
 
 def register(sub: Any) -> None:
     """Add ``gridworld`` to the ``mover`` command's sub-parsers."""
-    p = sub.add_parser("gridworld", help="run a grid world process (lock-step rounds)",
-                       description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = sub.add_parser(
+        "gridworld",
+        help="run a grid world process (lock-step rounds)",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     p.add_argument("file", metavar="FILE", help="a grid file (text or JSON) or a maze JSON")
     p.add_argument("--layout", metavar="JSON", help="layout settings as a JSON object")
-    p.add_argument("--expect", type=int, default=0, metavar="N",
-                   help="wait for N robots before the first round")
-    p.add_argument("--timeout", type=float, default=5.0, metavar="S",
-                   help="drop a robot silent for S wall seconds in a round (default 5)")
+    p.add_argument(
+        "--expect",
+        type=int,
+        default=0,
+        metavar="N",
+        help="wait for N robots before the first round",
+    )
+    p.add_argument(
+        "--timeout",
+        type=float,
+        default=5.0,
+        metavar="S",
+        help="drop a robot silent for S wall seconds in a round (default 5)",
+    )
     p.add_argument("--seed", type=int, default=0, help="seed of the world's own draws")
     p.add_argument("--name", default="gridworld", help="the world process's node name")
-    p.add_argument("--until", choices=["exhausted", "delivered", "explored", "never"],
-                   help="the observer's end of a run (default: by the file)")
-    p.add_argument("--turns", choices=["together", "sequential"], default="together",
-                   help="together: every robot perceives the round's start (default); "
-                        "sequential: one at a time in name order, as GridWorld.step")
+    p.add_argument(
+        "--until",
+        choices=["exhausted", "delivered", "explored", "never"],
+        help="the observer's end of a run (default: by the file)",
+    )
+    p.add_argument(
+        "--turns",
+        choices=["together", "sequential"],
+        default="together",
+        help="together: every robot perceives the round's start (default); "
+        "sequential: one at a time in name order, as GridWorld.step",
+    )
     p.add_argument("--snapshots", metavar="DIR", help="write text snapshots to DIR")
-    p.add_argument("--snapshot-every", type=int, default=0, metavar="N",
-                   help="a snapshot every N rounds (with --snapshots; 0: only at the end)")
-    p.add_argument("--quit-when-empty", action="store_true",
-                   help="stop once robots have come and all have left")
+    p.add_argument(
+        "--snapshot-every",
+        type=int,
+        default=0,
+        metavar="N",
+        help="a snapshot every N rounds (with --snapshots; 0: only at the end)",
+    )
+    p.add_argument(
+        "--quit-when-empty",
+        action="store_true",
+        help="stop once robots have come and all have left",
+    )
     p.set_defaults(func=run)
 
 
-def build_server(path: str, layout: dict[str, Any], *, seed: int = 0, expect: int = 0,
-                 timeout: float = 5.0, until: str | None = None,
-                 turns: str = "together") -> Any:
+def build_server(
+    path: str,
+    layout: dict[str, Any],
+    *,
+    seed: int = 0,
+    expect: int = 0,
+    timeout: float = 5.0,
+    until: str | None = None,
+    turns: str = "together",
+) -> Any:
     """The :class:`~sim_hw.grid_server.GridServer` that FILE and the layout describe."""
     import numpy as np
 
@@ -81,8 +117,12 @@ def build_server(path: str, layout: dict[str, Any], *, seed: int = 0, expect: in
             starts = list(maze.starts)
             base = starts[0] if starts else None
             resources: dict[tuple[int, int], int] = {}
-            settings = {"exclusive": True, "radio": broadcast_range(maze.shape),
-                        "metric": "manhattan", "until": "explored"}
+            settings = {
+                "exclusive": True,
+                "radio": broadcast_range(maze.shape),
+                "metric": "manhattan",
+                "until": "explored",
+            }
         else:
             found = load_layout(p)
             grid, base, resources, starts = found.grid, found.base, dict(found.resources), []
@@ -104,25 +144,40 @@ def build_server(path: str, layout: dict[str, Any], *, seed: int = 0, expect: in
     if "place" in layout:
         spec = layout["place"]
         home: tuple[int, int] = base
-        resources.update(place(grid, int(spec["count"]), int(spec["quantity"]), seed,
-                               exclude=(home,), reachable_from=home))
+        resources.update(
+            place(
+                grid,
+                int(spec["count"]),
+                int(spec["quantity"]),
+                seed,
+                exclude=(home,),
+                reachable_from=home,
+            )
+        )
     if "starts" in layout:
         starts = [cell(s) for s in layout["starts"]]
     ph = settings.get("pheromone")
     field = None
     if ph:
         ph = ph if isinstance(ph, dict) else {}
-        field = PheromoneField(~grid.obstacles, float(ph.get("diffusion", 0.95)),
-                               float(ph.get("evaporation", 0.005)))
+        field = PheromoneField(
+            ~grid.obstacles, float(ph.get("diffusion", 0.95)), float(ph.get("evaporation", 0.005))
+        )
     try:
         world = GridWorld(grid, base, resources, pheromone=field)
         default_until = "exhausted" if resources else "never"
         return GridServer(
-            world, starts=starts, exclusive=bool(settings.get("exclusive", False)),
-            radio=settings.get("radio"), metric=settings.get("metric", "euclid"),
-            until=until or settings.get("until", default_until), expect=expect,
-            timeout=timeout, view=int(settings.get("view", 2)),
-            turns=settings.get("turns", turns))
+            world,
+            starts=starts,
+            exclusive=bool(settings.get("exclusive", False)),
+            radio=settings.get("radio"),
+            metric=settings.get("metric", "euclid"),
+            until=until or settings.get("until", default_until),
+            expect=expect,
+            timeout=timeout,
+            view=int(settings.get("view", 2)),
+            turns=settings.get("turns", turns),
+        )
     except ValueError as exc:
         raise UsageError(f"{path}: {exc}") from None
 
@@ -132,11 +187,19 @@ def _cells(layout: dict[str, Any]) -> Any:
         if not (isinstance(value, list) and len(value) == 2):
             raise UsageError(f"--layout: expected [row, col], got {value!r}")
         return (int(value[0]), int(value[1]))
+
     return cell
 
 
-async def serve(server: Any, *, name: str, team: Any, config: Any,
-                quit_when_empty: bool = False, snapshots: str | None = None) -> None:
+async def serve(
+    server: Any,
+    *,
+    name: str,
+    team: Any,
+    config: Any,
+    quit_when_empty: bool = False,
+    snapshots: str | None = None,
+) -> None:
     """Open a node named ``name``, serve ``server`` and run until cancelled (or empty)."""
     from mover import Node
 
@@ -173,8 +236,15 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"--layout is not JSON: {exc.msg}") from None
     if not isinstance(layout, dict):
         raise UsageError("--layout must be a JSON object")
-    server = build_server(args.file, layout, seed=args.seed, expect=args.expect,
-                          timeout=args.timeout, until=args.until, turns=args.turns)
+    server = build_server(
+        args.file,
+        layout,
+        seed=args.seed,
+        expect=args.expect,
+        timeout=args.timeout,
+        until=args.until,
+        turns=args.turns,
+    )
     if args.snapshots and args.snapshot_every > 0:
         every, where = args.snapshot_every, Path(args.snapshots)
 
@@ -183,19 +253,34 @@ def run(args: argparse.Namespace) -> int:
         def on_round(s: Any) -> None:  # idle rounds change nothing: no snapshot of them
             if s.round % every == 0:
                 w = s.world
-                mark = hash((tuple(w.marks), tuple(w.colours), tuple(w.resources),
-                             tuple(sorted(b.cell for b in s.robots.values()))))
+                mark = hash(
+                    (
+                        tuple(w.marks),
+                        tuple(w.colours),
+                        tuple(w.resources),
+                        tuple(sorted(b.cell for b in s.robots.values())),
+                    )
+                )
                 if last != [mark]:
                     last[:] = [mark]
                     s.snapshot(str(where / f"round-{s.round:06d}.txt"))
+
         server.on_round = on_round
     try:
         team, config = Team.from_env(), NodeConfig.from_env()
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     try:
-        asyncio.run(serve(server, name=args.name, team=team, config=config,
-                          quit_when_empty=args.quit_when_empty, snapshots=args.snapshots))
+        asyncio.run(
+            serve(
+                server,
+                name=args.name,
+                team=team,
+                config=config,
+                quit_when_empty=args.quit_when_empty,
+                snapshots=args.snapshots,
+            )
+        )
     except KeyboardInterrupt:
         return 130
     return 0

@@ -27,8 +27,15 @@ _OWNER: contextvars.ContextVar[object | None] = contextvars.ContextVar("grid_own
 class GridRobot:
     """Perception cache, action buffer and round clock of one grid robot."""
 
-    def __init__(self, robot_id: str, spec: dict[str, Any], readings: dict[str, Any],
-                 exchange: Exchange, *, idle_period: float = 0.01) -> None:
+    def __init__(
+        self,
+        robot_id: str,
+        spec: dict[str, Any],
+        readings: dict[str, Any],
+        exchange: Exchange,
+        *,
+        idle_period: float = 0.01,
+    ) -> None:
         self.id = robot_id
         self.spec = spec
         self.readings = readings
@@ -124,8 +131,10 @@ class GridRobot:
 
     def around(self) -> tuple[Near, ...]:
         """The neighbouring cells, in direction order."""
-        return tuple(Near(int(d), int(s), int(v), int(c), int(r), bool(b), float(p))
-                     for d, s, v, c, r, b, p in self.readings["around"])
+        return tuple(
+            Near(int(d), int(s), int(v), int(c), int(r), bool(b), float(p))
+            for d, s, v, c, r, b, p in self.readings["around"]
+        )
 
     def rays(self) -> tuple[Seen, ...]:
         """Cells seen along the view rays, relative to the robot."""
@@ -220,21 +229,29 @@ class _View:
             setattr(self, name, value)
 
 
-async def in_process(server: Any, robot_id: str, spec: dict[str, Any] | None = None,
-                     *, idle_period: float = 0.0) -> GridHardware:
+async def in_process(
+    server: Any, robot_id: str, spec: dict[str, Any] | None = None, *, idle_period: float = 0.0
+) -> GridHardware:
     """Join ``server`` (a :class:`~sim_hw.grid_server.GridServer` in this process)."""
     joined = await server.join(robot_id, spec)
 
     async def exchange(round: int, action: dict[str, Any]) -> dict[str, Any]:
         return await server.step(robot_id, round, action)  # type: ignore[no-any-return]
 
-    return GridRobot(robot_id, joined["spec"], joined["readings"], exchange,
-                     idle_period=idle_period).hardware()
+    return GridRobot(
+        robot_id, joined["spec"], joined["readings"], exchange, idle_period=idle_period
+    ).hardware()
 
 
-async def connect(node: Any, robot_id: str, spec: dict[str, Any] | None = None, *,
-                  world: str = "gridworld", call_timeout: float = 30.0,
-                  idle_period: float = 0.01) -> GridHardware:
+async def connect(
+    node: Any,
+    robot_id: str,
+    spec: dict[str, Any] | None = None,
+    *,
+    world: str = "gridworld",
+    call_timeout: float = 30.0,
+    idle_period: float = 0.01,
+) -> GridHardware:
     """Join the grid world process ``world`` over ``node`` (a ``mover.Node``); return the HAL.
 
     The ``grid`` hardware backend. One call per round: ``step(robot, round, action) ->
@@ -249,5 +266,6 @@ async def connect(node: Any, robot_id: str, spec: dict[str, Any] | None = None, 
     async def exchange(round: int, action: dict[str, Any]) -> dict[str, Any]:
         return await call("step", robot_id, round, action)  # type: ignore[no-any-return]
 
-    return GridRobot(robot_id, joined["spec"], joined["readings"], exchange,
-                     idle_period=idle_period).hardware()
+    return GridRobot(
+        robot_id, joined["spec"], joined["readings"], exchange, idle_period=idle_period
+    ).hardware()

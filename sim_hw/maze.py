@@ -27,7 +27,14 @@ OBSTACLE = 1
 
 #: The 8 rays of the star sensor: 4 straight, 4 diagonal (section III-A).
 RAYS: tuple[tuple[int, int], ...] = (
-    (-1, 0), (1, 0), (0, -1), (0, 1), (-1, -1), (-1, 1), (1, -1), (1, 1),
+    (-1, 0),
+    (1, 0),
+    (0, -1),
+    (0, 1),
+    (-1, -1),
+    (-1, 1),
+    (1, -1),
+    (1, 1),
 )
 #: 4-connected moves an agent may make, plus staying put.
 MOVES: tuple[tuple[int, int], ...] = ((0, 0), (-1, 0), (1, 0), (0, -1), (0, 1))

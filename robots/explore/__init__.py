@@ -44,10 +44,15 @@ def make_team(
     seed: int | np.random.SeedSequence,
 ) -> list[ExplorerAgent]:
     """One agent per start cell, each with its own policy and an independent seeded stream."""
-    seqs = np.random.SeedSequence(seed).spawn(len(starts)) if isinstance(seed, int) \
+    seqs = (
+        np.random.SeedSequence(seed).spawn(len(starts))
+        if isinstance(seed, int)
         else seed.spawn(len(starts))
-    return [ExplorerAgent(i, shape, starts, make_policy(method), np.random.default_rng(s))
-            for i, s in enumerate(seqs)]
+    )
+    return [
+        ExplorerAgent(i, shape, starts, make_policy(method), np.random.default_rng(s))
+        for i, s in enumerate(seqs)
+    ]
 
 
 __all__ = [

@@ -151,8 +151,9 @@ class ExplorerAgent:
             self._merge_cells(msg)
             goal = msg.get("goal")
             peer_regions = frozenset(int(r) for r in msg["regions"])
-            peer = Peer(self._index(msg["pos"]), None if goal is None else self._index(goal),
-                        peer_regions)
+            peer = Peer(
+                self._index(msg["pos"]), None if goal is None else self._index(goal), peer_regions
+            )
             peers[sender] = peer
             for r in peer_regions:
                 self._last_heard[r] = self._round
@@ -245,8 +246,12 @@ class ExplorerAgent:
         if self._share is not None:
             return self._share
         share = np.ones(self._flat.shape, dtype=bool)
-        holders = {pid: cell for r in self.regions
-                   for pid, cell in self._holders.get(r, {}).items() if pid != self.id}
+        holders = {
+            pid: cell
+            for r in self.regions
+            for pid, cell in self._holders.get(r, {}).items()
+            if pid != self.id
+        }
         if holders:
             passable = passable_mask(self.known)
             mine = np.array(wavefront(passable, self.pos, self.width)[0])
@@ -279,8 +284,13 @@ class ExplorerAgent:
             targets &= ~(self._in_region | self._in_merged)
         if self._estimate:
             return self._switch_by_estimate(targets)
-        _, _, found = wavefront(passable_mask(self.known), self.pos, self.width,
-                                bytearray(targets.tobytes()), nearest_only=True)
+        _, _, found = wavefront(
+            passable_mask(self.known),
+            self.pos,
+            self.width,
+            bytearray(targets.tobytes()),
+            nearest_only=True,
+        )
         if not found:
             return False
         self.set_regions({int(self.region_of[min(found)])})
@@ -292,8 +302,9 @@ class ExplorerAgent:
     DIST_RATE = 8.0  # extra cells of estimated work a round of travel costs
 
     def _switch_by_estimate(self, targets: np.ndarray) -> bool:
-        dist, _, found = wavefront(passable_mask(self.known), self.pos, self.width,
-                                   bytearray(targets.tobytes()))
+        dist, _, found = wavefront(
+            passable_mask(self.known), self.pos, self.width, bytearray(targets.tobytes())
+        )
         if not found:
             return False
         cells = np.array(found)
@@ -304,8 +315,9 @@ class ExplorerAgent:
             here = region == r
             d = int(away[here].min())
             unknown = int(here.sum())
-            done_unseen = min(self.STALE_RATE * (self._round + d - self._last_heard[r]),
-                              self.STALE_CAP * unknown)
+            done_unseen = min(
+                self.STALE_RATE * (self._round + d - self._last_heard[r]), self.STALE_CAP * unknown
+            )
             left = unknown - done_unseen - self.DIST_RATE * d
             if best is None or (left, -d) > best[0]:
                 best = ((left, -d), int(r))
@@ -323,8 +335,9 @@ class ExplorerAgent:
         """Cells of the agents heard this round whose id is smaller (they have the way)."""
         return [p.pos for pid, p in self.peers.items() if pid < self.id]
 
-    def step_towards(self, goal: int, passable: bytearray,
-                     gain: list[int] | None = None) -> Move | None:
+    def step_towards(
+        self, goal: int, passable: bytearray, gain: list[int] | None = None
+    ) -> Move | None:
         """One move along a shortest path to ``goal`` over ``passable``; None if unreachable.
         With ``gain`` (per cell) the path is, of the shortest ones, one with the most gain.
 
@@ -333,8 +346,9 @@ class ExplorerAgent:
         """
         target = bytearray(len(passable))
         target[goal] = 1
-        _, parent, found = wavefront(passable, self.pos, self.width, target, nearest_only=True,
-                                     gain=gain)
+        _, parent, found = wavefront(
+            passable, self.pos, self.width, target, nearest_only=True, gain=gain
+        )
         if not found:
             return None
         path = path_to(parent, self.pos, goal)
@@ -346,9 +360,11 @@ class ExplorerAgent:
     def sidestep(self) -> Move:
         """A random move to a known free neighbour that no heard agent occupies."""
         taken = set(self.peer_cells())
-        options = [m for m in (self.pos - self.width, self.pos + self.width,
-                               self.pos - 1, self.pos + 1)
-                   if self._flat[m] == FREE and m not in taken]
+        options = [
+            m
+            for m in (self.pos - self.width, self.pos + self.width, self.pos - 1, self.pos + 1)
+            if self._flat[m] == FREE and m not in taken
+        ]
         if not options:
             return STAY
         return self.move_to(options[int(self.rng.integers(len(options)))])

@@ -55,8 +55,13 @@ class FrontierPolicy:
         passable = passable_mask(agent.known, ahead)
         self.gain = self.path_gain(agent)
         goal = agent.goal
-        if (self.hold_goal and not stuck and goal is not None and cand[goal]
-                and self.keep(agent, goal)):
+        if (
+            self.hold_goal
+            and not stuck
+            and goal is not None
+            and cand[goal]
+            and self.keep(agent, goal)
+        ):
             move = agent.step_towards(goal, passable, self.gain)
             if move is not None:
                 return move
@@ -102,8 +107,9 @@ class NearestFrontier(FrontierPolicy):
 
     def select(self, agent: ExplorerAgent, cand: np.ndarray, passable: bytearray) -> int | None:
         """The nearest candidate by wavefront distance."""
-        _, _, found = wavefront(passable, agent.pos, agent.width,
-                                bytearray(cand.tobytes()), nearest_only=True)
+        _, _, found = wavefront(
+            passable, agent.pos, agent.width, bytearray(cand.tobytes()), nearest_only=True
+        )
         if not found:
             return None
         return found[int(agent.rng.integers(len(found)))]
@@ -116,13 +122,13 @@ class CostUtilityMNM(FrontierPolicy):
 
     def select(self, agent: ExplorerAgent, cand: np.ndarray, passable: bytearray) -> int | None:
         """Nearest frontiers, ranked by the summed distance to the agents heard."""
-        _, _, found = wavefront(passable, agent.pos, agent.width,
-                                bytearray(cand.tobytes()), nearest_only=True)
+        _, _, found = wavefront(
+            passable, agent.pos, agent.width, bytearray(cand.tobytes()), nearest_only=True
+        )
         if not found:
             return None
         others = agent.peer_cells()
-        return max(sorted(found),
-                   key=lambda f: sum(_manhattan(f, o, agent.width) for o in others))
+        return max(sorted(found), key=lambda f: sum(_manhattan(f, o, agent.width) for o in others))
 
 
 class CostUtilityJGR(FrontierPolicy):
@@ -142,8 +148,7 @@ class CostUtilityJGR(FrontierPolicy):
         unex = unexplored_in_view(agent.known, self.reach).ravel()
         longest = max(dist[f] for f in found)
         area = math.pi * self.reach**2
-        return max(sorted(found),
-                   key=lambda f: unex[f] / area - self.lam * dist[f] / longest)
+        return max(sorted(found), key=lambda f: unex[f] / area - self.lam * dist[f] / longest)
 
 
 class CostUtilityBSO(FrontierPolicy):
@@ -209,8 +214,14 @@ class CULVP(FrontierPolicy):
             targets[held] = False
         gain = self.gain if self.gain is not None else self.path_gain(agent)
         assert gain is not None
-        _, parent, found = wavefront(passable, agent.pos, agent.width,
-                                     bytearray(targets.tobytes()), nearest_only=True, gain=gain)
+        _, parent, found = wavefront(
+            passable,
+            agent.pos,
+            agent.width,
+            bytearray(targets.tobytes()),
+            nearest_only=True,
+            gain=gain,
+        )
         if not found:
             return None
         if len(found) == 1:
@@ -218,7 +229,9 @@ class CULVP(FrontierPolicy):
         found.sort()
         agents = [agent.pos, *agent.peer_cells()]
         mnm = [float(sum(_manhattan(f, a, agent.width) for a in agents)) for f in found]
-        jgr = [float(gain[agent.pos] + sum(gain[x] for x in path_to(parent, agent.pos, f)))
-               for f in found]
+        jgr = [
+            float(gain[agent.pos] + sum(gain[x] for x in path_to(parent, agent.pos, f)))
+            for f in found
+        ]
         score = [a + self.lam * b for a, b in zip(_norm(mnm), _norm(jgr), strict=True)]
         return found[int(np.argmax(score))]

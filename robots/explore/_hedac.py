@@ -64,8 +64,12 @@ class Hedac:
         """Whether the last four rounds went a, b, a, b with nothing learnt."""
         trail = self._trail
         trail.append((pos, explored))
-        if (len(trail) == 4 and trail[0][0] == trail[2][0] and trail[1][0] == trail[3][0]
-                and trail[0][1] == explored):
+        if (
+            len(trail) == 4
+            and trail[0][0] == trail[2][0]
+            and trail[1][0] == trail[3][0]
+            and trail[0][1] == explored
+        ):
             trail.clear()
             return True
         return False
@@ -87,9 +91,12 @@ class Hedac:
         if not self._pursue:
             open_ = (known == FREE) | cand
             open_[peers] = False
-            u = attracting_field(open_.reshape(agent.shape),
-                                 (cand * float(explored)).reshape(agent.shape),
-                                 self.alpha, self.iterations).ravel()
+            u = attracting_field(
+                open_.reshape(agent.shape),
+                (cand * float(explored)).reshape(agent.shape),
+                self.alpha,
+                self.iterations,
+            ).ravel()
             best, best_u = -1, 0.0
             for k in (agent.pos - w, agent.pos + w, agent.pos - 1, agent.pos + 1):
                 if open_[k] and u[k] > best_u:

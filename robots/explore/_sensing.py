@@ -11,7 +11,14 @@ import numpy as np
 from ._grid import OBSTACLE, UNKNOWN
 
 RAYS: tuple[tuple[int, int], ...] = (
-    (-1, 0), (1, 0), (0, -1), (0, 1), (-1, -1), (-1, 1), (1, -1), (1, 1),
+    (-1, 0),
+    (1, 0),
+    (0, -1),
+    (0, 1),
+    (-1, -1),
+    (-1, 1),
+    (1, -1),
+    (1, 1),
 )
 
 
@@ -33,6 +40,6 @@ def unexplored_in_view(known: np.ndarray, reach: int = 2) -> np.ndarray:
         open_ray[:] = True
         for k in range(1, reach + 1):
             r0, c0 = reach + k * dr, reach + k * dc  # the cell k steps along the ray, as views
-            count += open_ray & unknown[r0:r0 + rows, c0:c0 + cols]
-            open_ray &= ~blocked[r0:r0 + rows, c0:c0 + cols]
+            count += open_ray & unknown[r0 : r0 + rows, c0 : c0 + cols]
+            open_ray &= ~blocked[r0 : r0 + rows, c0 : c0 + cols]
     return count

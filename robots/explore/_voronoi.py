@@ -30,8 +30,12 @@ def voronoi_partition(passable: np.ndarray, seeds: list[tuple[int, int]]) -> np.
         nxt = []
         for k in level:
             r, c = divmod(k, cols)
-            for m, ok in ((k - cols, r > 0), (k + cols, r < rows - 1),
-                          (k - 1, c > 0), (k + 1, c < cols - 1)):
+            for m, ok in (
+                (k - cols, r > 0),
+                (k + cols, r < rows - 1),
+                (k - 1, c > 0),
+                (k + 1, c < cols - 1),
+            ):
                 if ok and lab[m] < 0 and flat[m]:
                     lab[m] = lab[k]
                     nxt.append(m)

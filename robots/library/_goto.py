@@ -17,9 +17,17 @@ from robots._robot import Robot
 from ._geometry import Point, Pose, bearing_to, clip, distance, to_frame, wrap
 
 
-def steer(pose: Pose, target: Point, ranges: Sequence[float], angles: Sequence[float], *,
-          speed: float = 0.4, avoid_range: float = 0.45, gain: float = 2.5,
-          max_turn: float = 1.5) -> tuple[float, float]:
+def steer(
+    pose: Pose,
+    target: Point,
+    ranges: Sequence[float],
+    angles: Sequence[float],
+    *,
+    speed: float = 0.4,
+    avoid_range: float = 0.45,
+    gain: float = 2.5,
+    max_turn: float = 1.5,
+) -> tuple[float, float]:
     """(v, w) toward ``target``, pushed away from what the sonar sees within ``avoid_range``.
 
     The attraction is a unit vector to the target; each close ray adds a repulsion growing as
@@ -37,8 +45,9 @@ def steer(pose: Pose, target: Point, ranges: Sequence[float], angles: Sequence[f
             ry -= k * math.sin(a)
     dx, dy = math.cos(b) + 1.5 * fade * rx, math.sin(b) + 1.5 * fade * ry
     desired = math.atan2(dy, dx)
-    front = min((r for r, a in zip(ranges, angles, strict=False) if abs(wrap(a)) < 0.8),
-                default=avoid_range)
+    front = min(
+        (r for r, a in zip(ranges, angles, strict=False) if abs(wrap(a)) < 0.8), default=avoid_range
+    )
     slow = clip((front - 0.03) / avoid_range, 0.0, 1.0) if fade > 0.5 else 1.0
     v = speed * max(0.0, math.cos(desired)) * max(slow, 0.15) * clip(dist / 0.3, 0.2, 1.0)
     if abs(desired) > 1.2:
@@ -46,8 +55,9 @@ def steer(pose: Pose, target: Point, ranges: Sequence[float], angles: Sequence[f
     return v, clip(gain * desired, -max_turn, max_turn)
 
 
-def detour(start: Point, goal: Point, center: Point, radius: float,
-           step: float = math.pi / 4) -> list[Point]:
+def detour(
+    start: Point, goal: Point, center: Point, radius: float, step: float = math.pi / 4
+) -> list[Point]:
     """Waypoints from ``start`` to ``goal`` that stay ``radius`` away from ``center``.
 
     If the straight segment clears the circle, just ``[goal]``; otherwise points on the circle,
@@ -59,8 +69,13 @@ def detour(start: Point, goal: Point, center: Point, radius: float,
     a1 = math.atan2(goal[1] - center[1], goal[0] - center[0])
     sweep = wrap(a1 - a0)
     n = max(1, math.ceil(abs(sweep) / step))
-    points = [(center[0] + radius * math.cos(a0 + sweep * i / n),
-               center[1] + radius * math.sin(a0 + sweep * i / n)) for i in range(1, n + 1)]
+    points = [
+        (
+            center[0] + radius * math.cos(a0 + sweep * i / n),
+            center[1] + radius * math.sin(a0 + sweep * i / n),
+        )
+        for i in range(1, n + 1)
+    ]
     return [*points, goal]
 
 
@@ -88,8 +103,15 @@ def _sonar(robot: Robot) -> tuple[tuple[float, ...], tuple[float, ...]]:
     return sonar.ranges(), sonar.angles
 
 
-def sidestep(pose: Pose, target: Point, ranges: Sequence[float], angles: Sequence[float],
-             *, reach: float = 0.9, blocked: float = 0.3) -> Point | None:
+def sidestep(
+    pose: Pose,
+    target: Point,
+    ranges: Sequence[float],
+    angles: Sequence[float],
+    *,
+    reach: float = 0.9,
+    blocked: float = 0.3,
+) -> Point | None:
     """A way round an obstacle between the robot and ``target``, or None if the way is free.
 
     When the sonar sees something within ``blocked`` m in front while the target is roughly
@@ -97,8 +119,9 @@ def sidestep(pose: Pose, target: Point, ranges: Sequence[float], angles: Sequenc
     the side with more room (a small step of the bug algorithms).
     """
     b = bearing_to(pose, target)
-    front = min((r for r, a in zip(ranges, angles, strict=False) if abs(wrap(a)) < 0.8),
-                default=math.inf)
+    front = min(
+        (r for r, a in zip(ranges, angles, strict=False) if abs(wrap(a)) < 0.8), default=math.inf
+    )
     if front > blocked or abs(b) > 1.2 or distance(pose, target) < front + 0.3:
         return None
     left = sum(r for r, a in zip(ranges, angles, strict=False) if 0.3 < wrap(a) < 2.0)
@@ -108,8 +131,14 @@ def sidestep(pose: Pose, target: Point, ranges: Sequence[float], angles: Sequenc
     return (pose[0] + reach * math.cos(heading), pose[1] + reach * math.sin(heading))
 
 
-async def goto_point(robot: Robot, target: Point, *, speed: float = 0.4,
-                     tolerance: float = 0.08, timeout: float = 60.0) -> bool:
+async def goto_point(
+    robot: Robot,
+    target: Point,
+    *,
+    speed: float = 0.4,
+    tolerance: float = 0.08,
+    timeout: float = 60.0,
+) -> bool:
     """Drive to ``target`` (odometry frame) avoiding obstacles; False if not there in time."""
     hw = robot.hw
     end = hw.clock.now() + timeout
@@ -134,8 +163,9 @@ async def goto_point(robot: Robot, target: Point, *, speed: float = 0.4,
         hw.drive.stop()
 
 
-async def turn_to(robot: Robot, heading: float, *, tolerance: float = 0.03,
-                  timeout: float = 10.0) -> None:
+async def turn_to(
+    robot: Robot, heading: float, *, tolerance: float = 0.03, timeout: float = 10.0
+) -> None:
     """Turn on the spot to ``heading`` (odometry frame)."""
     hw = robot.hw
     end = hw.clock.now() + timeout
@@ -150,8 +180,7 @@ async def turn_to(robot: Robot, heading: float, *, tolerance: float = 0.03,
         hw.drive.stop()
 
 
-async def approach(robot: Robot, heading: float, *, speed: float = 0.1,
-                   limit: float = 1.0) -> bool:
+async def approach(robot: Robot, heading: float, *, speed: float = 0.1, limit: float = 1.0) -> bool:
     """The cautious approach: creep along ``heading`` until the front bumper touches."""
     hw = robot.hw
     start = hw.odometry.pose()
@@ -176,15 +205,24 @@ def _refine(robot: Robot, object_id: str | None, location: Point) -> Point:
     pose = robot.hw.odometry.pose()
     for s in cam.sightings():
         if s.id == object_id:
-            return (pose[0] + s.range * math.cos(pose[2] + s.bearing),
-                    pose[1] + s.range * math.sin(pose[2] + s.bearing))
+            return (
+                pose[0] + s.range * math.cos(pose[2] + s.bearing),
+                pose[1] + s.range * math.sin(pose[2] + s.bearing),
+            )
     return location
 
 
-async def goto_object(robot: Robot, location: Sequence[float], heading: float,
-                      lateral: float = 0.0, *, object_id: str | None = None,
-                      standoff: float = 0.9, clearance: float = 1.0,
-                      timeout: float = 120.0) -> dict[str, Any]:
+async def goto_object(
+    robot: Robot,
+    location: Sequence[float],
+    heading: float,
+    lateral: float = 0.0,
+    *,
+    object_id: str | None = None,
+    standoff: float = 0.9,
+    clearance: float = 1.0,
+    timeout: float = 120.0,
+) -> dict[str, Any]:
     """Go to the object at ``location`` and stand against it facing ``heading`` (section 4.3).
 
     The robot drives (round the object if needed, ``clearance`` m from its centre) to a point
@@ -208,14 +246,19 @@ async def goto_object(robot: Robot, location: Sequence[float], heading: float,
                 break
             loc = seen
         contact = await approach(robot, heading, limit=standoff)
-        return {"arrived": arrived, "contact": contact, "location": list(loc),
-                "pose": list(hw.odometry.pose())}
+        return {
+            "arrived": arrived,
+            "contact": contact,
+            "location": list(loc),
+            "pose": list(hw.odometry.pose()),
+        }
     finally:
         hw.drive.stop()
 
 
-def follow_command(seen_range: float | None, seen_bearing: float, *, gap: float = 0.7,
-                   speed: float = 0.35) -> tuple[float, float]:
+def follow_command(
+    seen_range: float | None, seen_bearing: float, *, gap: float = 0.7, speed: float = 0.35
+) -> tuple[float, float]:
     """Keep ``gap`` m behind a leader seen at (range, bearing); turn to look for it if unseen
     (section 5: the trainee follows the trainer)."""
     if seen_range is None:
@@ -229,11 +272,22 @@ async def follow(robot: Robot, leader: str, *, gap: float = 0.7, speed: float = 
     hw = robot.hw
     try:
         while True:
-            seen = next((s for s in (hw.camera.sightings() if hw.camera else ())
-                         if s.kind == "robot" and s.id == leader), None)
-            hw.drive.set_velocity(*follow_command(
-                seen.range if seen else None, seen.bearing if seen else 0.0, gap=gap,
-                speed=speed))
+            seen = next(
+                (
+                    s
+                    for s in (hw.camera.sightings() if hw.camera else ())
+                    if s.kind == "robot" and s.id == leader
+                ),
+                None,
+            )
+            hw.drive.set_velocity(
+                *follow_command(
+                    seen.range if seen else None,
+                    seen.bearing if seen else 0.0,
+                    gap=gap,
+                    speed=speed,
+                )
+            )
             await hw.clock.tick()
     finally:
         hw.drive.stop()

@@ -41,8 +41,9 @@ class Path:
     @classmethod
     def relative(cls, origin: Sequence[float], offsets: Sequence[Sequence[float]]) -> Path:
         """The path through ``origin + offset`` for each offset."""
-        return cls((float(origin[0]), float(origin[1])),
-                   tuple((float(p[0]), float(p[1])) for p in offsets))
+        return cls(
+            (float(origin[0]), float(origin[1])), tuple((float(p[0]), float(p[1])) for p in offsets)
+        )
 
     def vertices(self) -> list[Point]:
         """The polyline's corners, origin first."""
@@ -90,8 +91,9 @@ class Path:
         return best[1], best[2], best[3]
 
 
-def stations(winner: str, members: Sequence[str], width: float,
-             margin: float = 0.18) -> dict[str, tuple[str, float]]:
+def stations(
+    winner: str, members: Sequence[str], width: float, margin: float = 0.18
+) -> dict[str, tuple[str, float]]:
     """Who does what and where: ``{member: (role, lateral offset)}`` along the rear face.
 
     The finder is the pusher (section 4.2, item 6) at the right rear corner; the others are
@@ -107,8 +109,9 @@ def stations(winner: str, members: Sequence[str], width: float,
     return out
 
 
-def sighting_of(sightings: Sequence[Sighting], object_id: str | None,
-                kind: str = "box") -> Sighting | None:
+def sighting_of(
+    sightings: Sequence[Sighting], object_id: str | None, kind: str = "box"
+) -> Sighting | None:
     """The sighting of the object being moved (by id, else the nearest of ``kind``)."""
     for s in sightings:
         if (s.id == object_id) if object_id is not None else (s.kind == kind):
@@ -133,15 +136,25 @@ def align(seen: Sighting | None, bearing0: float, gain: float = 2.0) -> float:
     return clip(gain * wrap(seen.bearing - bearing0), -0.8, 0.8)
 
 
-def pusher_command(seen: Sighting | None, bearing0: float,
-                   speed: float = 0.3) -> tuple[float, float]:
+def pusher_command(
+    seen: Sighting | None, bearing0: float, speed: float = 0.3
+) -> tuple[float, float]:
     """The pusher: constant speed, square to the face."""
     return speed, align(seen, bearing0)
 
 
-def steerer_command(path: Path, box: Pose | None, lateral: float, seen: Sighting | None,
-                    bearing0: float, *, speed: float = 0.3, authority: float = 0.2,
-                    k_cross: float = 0.8, k_heading: float = 0.6) -> tuple[float, float]:
+def steerer_command(
+    path: Path,
+    box: Pose | None,
+    lateral: float,
+    seen: Sighting | None,
+    bearing0: float,
+    *,
+    speed: float = 0.3,
+    authority: float = 0.2,
+    k_cross: float = 0.8,
+    k_heading: float = 0.6,
+) -> tuple[float, float]:
     """The steerer: the pusher's speed ±``authority``, to turn the object toward the path.
 
     The desired object heading is the path's, turned toward the path by the object's
@@ -165,8 +178,15 @@ def _sightings(robot: Robot) -> tuple[Sighting, ...]:
     return robot.hw.camera.sightings() if robot.hw.camera is not None else ()
 
 
-async def _manipulate(robot: Robot, path: Path, lateral: float, object_id: str | None,
-                      steer: bool, speed: float, timeout: float) -> dict[str, Any]:
+async def _manipulate(
+    robot: Robot,
+    path: Path,
+    lateral: float,
+    object_id: str | None,
+    steer: bool,
+    speed: float,
+    timeout: float,
+) -> dict[str, Any]:
     hw = robot.hw
     start = hw.odometry.pose()
     track = path.shifted((start[0] - path.origin[0], start[1] - path.origin[1]))
@@ -191,15 +211,25 @@ async def _manipulate(robot: Robot, path: Path, lateral: float, object_id: str |
             hw.drive.set_velocity(v, w)
             await hw.clock.tick()
         moved = math.dist(box[:2], path.origin) if box is not None else progress
-        return {"progress": progress, "done": progress >= track.length(), "moved": moved,
-                "object": list(box) if box is not None else None,
-                "pose": list(hw.odometry.pose())}
+        return {
+            "progress": progress,
+            "done": progress >= track.length(),
+            "moved": moved,
+            "object": list(box) if box is not None else None,
+            "pose": list(hw.odometry.pose()),
+        }
     finally:
         hw.drive.stop()
 
 
-async def pusher(robot: Robot, path: Path, *, object_id: str | None = None,
-                 speed: float = 0.3, timeout: float = 120.0) -> dict[str, Any]:
+async def pusher(
+    robot: Robot,
+    path: Path,
+    *,
+    object_id: str | None = None,
+    speed: float = 0.3,
+    timeout: float = 120.0,
+) -> dict[str, Any]:
     """Push the object along ``path`` at a constant speed, staying square to its face
     (section 4.3, ``pusher``); stops when this robot has gone the path's length.
 
@@ -210,8 +240,15 @@ async def pusher(robot: Robot, path: Path, *, object_id: str | None = None,
     return await _manipulate(robot, path, 0.0, object_id, False, speed, timeout)
 
 
-async def steerer(robot: Robot, path: Path, lateral: float, *, object_id: str | None = None,
-                  speed: float = 0.3, timeout: float = 120.0) -> dict[str, Any]:
+async def steerer(
+    robot: Robot,
+    path: Path,
+    lateral: float,
+    *,
+    object_id: str | None = None,
+    speed: float = 0.3,
+    timeout: float = 120.0,
+) -> dict[str, Any]:
     """Steer the object along ``path`` from ``lateral`` m left of its centre line (section
     4.3, ``steerer``): the pusher's speed, ±0.2 m/s to turn the object toward the path.
 

@@ -46,8 +46,9 @@ class Found(NamedTuple):
     def load(cls, data: Sequence[Any]) -> Found:
         """A Found from itself or from its wire form (a list of lists)."""
         oid, loc, pose = data
-        return cls(oid, (float(loc[0]), float(loc[1])), (float(pose[0]), float(pose[1]),
-                                                        float(pose[2])))
+        return cls(
+            oid, (float(loc[0]), float(loc[1])), (float(pose[0]), float(pose[1]), float(pose[2]))
+        )
 
 
 # -- decision rules --------------------------------------------------------------------------
@@ -62,9 +63,17 @@ class Wander:
     turn to a random heading away from it. Sonar only slows the approach, so contact is gentle.
     """
 
-    def __init__(self, rng: Rng, *, speed: float = 0.4, creep: float = 0.12,
-                 slow_range: float = 0.3, gain: float = 2.5, max_turn: float = 1.5,
-                 backoff: float = 0.25) -> None:
+    def __init__(
+        self,
+        rng: Rng,
+        *,
+        speed: float = 0.4,
+        creep: float = 0.12,
+        slow_range: float = 0.3,
+        gain: float = 2.5,
+        max_turn: float = 1.5,
+        backoff: float = 0.25,
+    ) -> None:
         self.rng = rng
         self.speed, self.creep, self.slow_range = speed, creep, slow_range
         self.gain, self.max_turn, self.backoff = gain, max_turn, backoff
@@ -122,18 +131,15 @@ def moved(displacement: float, threshold: float = 0.005) -> bool:
     return displacement > threshold
 
 
-def teammate_ahead(sightings: Sequence[Sighting], reach: float = 0.45,
-                   cone: float = 0.6) -> bool:
+def teammate_ahead(sightings: Sequence[Sighting], reach: float = 0.45, cone: float = 0.6) -> bool:
     """Whether the thing just bumped is another robot (seen straight ahead and close).
 
     A teammate would "move" when pushed because it drives itself: it must not pass the test.
     """
-    return any(s.kind == "robot" and s.range < reach and abs(s.bearing) < cone
-               for s in sightings)
+    return any(s.kind == "robot" and s.range < reach and abs(s.bearing) < cone for s in sightings)
 
 
-def kind_ahead(sightings: Sequence[Sighting], reach: float = 0.9,
-               cone: float = 0.8) -> str | None:
+def kind_ahead(sightings: Sequence[Sighting], reach: float = 0.9, cone: float = 0.8) -> str | None:
     """The camera's kind of the nearest thing straight ahead within ``reach`` (the thing just
     bumped), or None."""
     for s in sightings:
@@ -142,8 +148,9 @@ def kind_ahead(sightings: Sequence[Sighting], reach: float = 0.9,
     return None
 
 
-def locate(pose: Pose, sightings: Sequence[Sighting], radius: float,
-           reach: float = 0.9, cone: float = 0.8) -> tuple[str | None, Point]:
+def locate(
+    pose: Pose, sightings: Sequence[Sighting], radius: float, reach: float = 0.9, cone: float = 0.8
+) -> tuple[str | None, Point]:
     """Where the object just bumped is: (id, centre) from the camera's nearest sighting ahead
     that is not a robot, else a point half a box beyond the contact point."""
     for s in sightings:
@@ -170,10 +177,15 @@ def _sightings(robot: Robot) -> tuple[Sighting, ...]:
     return robot.hw.camera.sightings() if robot.hw.camera is not None else ()
 
 
-async def search(robot: Robot, predicate: Predicate,
-                 terminator: Callable[[], bool] | None = None,
-                 rng: Rng | None = None, *, wander: Wander | None = None,
-                 radius: float = 0.15) -> Found | None:
+async def search(
+    robot: Robot,
+    predicate: Predicate,
+    terminator: Callable[[], bool] | None = None,
+    rng: Rng | None = None,
+    *,
+    wander: Wander | None = None,
+    radius: float = 0.15,
+) -> Found | None:
     """Random-walk until an object passing ``predicate`` is found (section 4.3, ``search``).
 
     ``terminator`` is polled every tick; when it returns True the search gives up and returns
@@ -205,8 +217,13 @@ async def search(robot: Robot, predicate: Predicate,
         hw.drive.stop()
 
 
-async def movable(robot: Robot, force: float = 50.0, duration: float = 1.0,
-                  threshold: float = 0.005, probe: float = 0.5) -> bool:
+async def movable(
+    robot: Robot,
+    force: float = 50.0,
+    duration: float = 1.0,
+    threshold: float = 0.005,
+    probe: float = 0.5,
+) -> bool:
     """MOVER's recognition (section 4.1): can this robot move what is in front of it?
 
     Push with a medium force (50 N of the demo robots' 70 N); if the object does not give,

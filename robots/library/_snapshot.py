@@ -15,8 +15,7 @@ def snapshot(robot: Robot) -> dict[str, Any]:
         "odometry": list(hw.odometry.pose()),
         "sonar": list(hw.sonar.ranges()) if hw.sonar is not None else None,
         "camera": [
-            {"kind": s.kind, "id": s.id, "status": s.status, "range": s.range,
-             "bearing": s.bearing}
+            {"kind": s.kind, "id": s.id, "status": s.status, "range": s.range, "bearing": s.bearing}
             for s in (hw.camera.sightings() if hw.camera is not None else ())
         ],
         "bumper": hw.bumper.side() if hw.bumper is not None else None,

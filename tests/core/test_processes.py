@@ -129,8 +129,10 @@ async def _until_routes_are_up(node: Node) -> None:
                 for r in POSITIONS:
                     await node.call(r, "send", "probe", 0, None, timeout=5)
                 await asyncio.sleep(0.1)
-                heard = {r: {h[0] for h in await node.call(r, "heard", "probe", timeout=5)}
-                         for r in POSITIONS}
+                heard = {
+                    r: {h[0] for h in await node.call(r, "heard", "probe", timeout=5)}
+                    for r in POSITIONS
+                }
                 if "r3" in {m.sender for m in probe.drain()} and all(
                     heard[r] >= set(POSITIONS) - {r} for r in POSITIONS
                 ):

@@ -33,8 +33,9 @@ async def test_four_robot_processes_forage_to_completion(tmp_path: Path) -> None
         await start_robots(c, names, [{"view": 0}] * 4)
         await node.team.wait_for([WORLD, *names], timeout=20)
         t0 = time.monotonic()
-        outcomes = await asyncio.wait_for(launch(
-            node, "foraging", names, {"method": "cmarking", "seed": 3}, run="forage"), 90)
+        outcomes = await asyncio.wait_for(
+            launch(node, "foraging", names, {"method": "cmarking", "seed": 3}, run="forage"), 90
+        )
         took = time.monotonic() - t0
         results = {n: o.get("result") for n, o in outcomes.items()}
         assert all(r and r["finished"] for r in results.values()), outcomes
@@ -49,13 +50,14 @@ async def test_four_robot_processes_forage_to_completion(tmp_path: Path) -> None
         assert Path(png).stat().st_size > 1000
         text = Path(txt).read_text()
         assert text.startswith("round ") and "remaining 0" in text and "values:" in text
-        print(f"\nforaging: {rounds} rounds in {took:.1f} s ({rounds / took:.0f} rounds/s); "
-              f"delivered {state['delivered']}; per robot {results}")
+        print(
+            f"\nforaging: {rounds} rounds in {took:.1f} s ({rounds / took:.0f} rounds/s); "
+            f"delivered {state['delivered']}; per robot {results}"
+        )
         print(text)
 
 
-async def test_sequential_turns_repeat_the_in_process_run_across_processes(
-        tmp_path: Path) -> None:
+async def test_sequential_turns_repeat_the_in_process_run_across_processes(tmp_path: Path) -> None:
     env_seed, agent_seed = (9, 1, 0), (9, 1, 0, 4, 0)
     trial = run_trial(Setup(12, 0.05, 2, 300), 4, "cmarking", env_seed, agent_seed, 20000)
     env = np.random.default_rng(np.random.SeedSequence(list(env_seed)))
@@ -67,10 +69,20 @@ async def test_sequential_turns_repeat_the_in_process_run_across_processes(
         await start_world(c, path, "--expect", "4", "--turns", "sequential")
         await start_robots(c, names, [{"view": 0}] * 4)
         await node.team.wait_for([WORLD, *names], timeout=20)
-        outcomes = await asyncio.wait_for(launch(node, "foraging", names, {
-            "method": "cmarking", "seed": list(agent_seed)}, run="sequential"), 90)
+        outcomes = await asyncio.wait_for(
+            launch(
+                node,
+                "foraging",
+                names,
+                {"method": "cmarking", "seed": list(agent_seed)},
+                run="sequential",
+            ),
+            90,
+        )
         results = {n: o.get("result") for n, o in outcomes.items()}
         assert all(r and r["finished"] for r in results.values()), outcomes
-    print(f"\nsequential turns: in-process {trial.iterations} iterations, robot processes "
-          f"{sorted({r['rounds'] for r in results.values()})}")
+    print(
+        f"\nsequential turns: in-process {trial.iterations} iterations, robot processes "
+        f"{sorted({r['rounds'] for r in results.values()})}"
+    )
     assert {r["rounds"] for r in results.values()} == {trial.iterations}

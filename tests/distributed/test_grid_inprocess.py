@@ -31,8 +31,9 @@ def corridor_server(**kw: Any) -> GridServer:
 
 async def test_a_round_waits_for_every_robot_and_applies_actions_in_name_order() -> None:
     server = corridor_server(exclusive=True, expect=2)
-    a, _ = await asyncio.gather(server.join("a", {"start": [1, 1]}),
-                                server.join("b", {"start": [1, 3]}))
+    a, _ = await asyncio.gather(
+        server.join("a", {"start": [1, 1]}), server.join("b", {"start": [1, 3]})
+    )
     assert a["readings"]["round"] == 0 and a["readings"]["hears"] == ["b"]
     assert [n[1] for n in a["readings"]["around"]] == [OBSTACLE, FREE, OBSTACLE, OBSTACLE]
     step_a = asyncio.ensure_future(server.step("a", 0, {"move": EAST, "value": 7}))
@@ -62,8 +63,9 @@ async def test_a_cancelled_step_does_not_fail_its_retry(turns: str) -> None:
     assert given_up.cancelled()
 
 
-async def test_a_silent_robot_is_dropped_after_the_timeout(caplog: pytest.LogCaptureFixture
-                                                           ) -> None:
+async def test_a_silent_robot_is_dropped_after_the_timeout(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
     server = corridor_server(expect=2, timeout=0.05)
     await asyncio.gather(server.join("a", {}), server.join("b", {}))
     with caplog.at_level(logging.WARNING, logger="sim_hw.grid_server"):
@@ -100,6 +102,7 @@ class _Node:
 
             async def __aexit__(self, *exc: object) -> None:
                 pass
+
         return Sub()
 
     async def broadcast(self, topic: str, data: Any, **kw: Any) -> None:
@@ -125,10 +128,12 @@ class _Robot:
         self.id, self.hw, self.node, self.log = name, hw, node, logging.getLogger(name)
 
 
-async def _run_team(server: GridServer, names: list[str], specs: list[dict[str, Any]],
-                    program: Any, **args: Any) -> list[dict[str, Any]]:
-    hws = await asyncio.gather(*(in_process(server, n, s) for n, s in zip(names, specs,
-                                                                          strict=True)))
+async def _run_team(
+    server: GridServer, names: list[str], specs: list[dict[str, Any]], program: Any, **args: Any
+) -> list[dict[str, Any]]:
+    hws = await asyncio.gather(
+        *(in_process(server, n, s) for n, s in zip(names, specs, strict=True))
+    )
 
     async def idle(hw: Any) -> None:
         while True:
@@ -137,48 +142,69 @@ async def _run_team(server: GridServer, names: list[str], specs: list[dict[str, 
     idles = [asyncio.ensure_future(idle(hw)) for hw in hws]
     bus = _Bus(names)
     try:
-        return list(await asyncio.gather(*(program(_Robot(n, hw, _Node(bus, n)), _Team(bus, n),
-                                                   **args) for n, hw in zip(names, hws,
-                                                                            strict=True))))
+        return list(
+            await asyncio.gather(
+                *(
+                    program(_Robot(n, hw, _Node(bus, n)), _Team(bus, n), **args)
+                    for n, hw in zip(names, hws, strict=True)
+                )
+            )
+        )
     finally:
         for task in idles:
             task.cancel()
         await asyncio.gather(*idles, return_exceptions=True)
 
 
-@pytest.mark.parametrize(("size", "p", "seed", "method"),
-                         [(15, 0.85, 1, "cu_lvp"), (20, 0.15, 3, "cu_lvp"), (15, 0.5, 4, "nf")])
-async def test_maze_rounds_match_the_in_process_runner(tmp_path: Path, size: int, p: float,
-                                                      seed: int, method: str) -> None:
+@pytest.mark.parametrize(
+    ("size", "p", "seed", "method"),
+    [(15, 0.85, 1, "cu_lvp"), (20, 0.15, 3, "cu_lvp"), (15, 0.5, 4, "nf")],
+)
+async def test_maze_rounds_match_the_in_process_runner(
+    tmp_path: Path, size: int, p: float, seed: int, method: str
+) -> None:
     maze = generate_maze(size, p, np.random.default_rng(seed), n_starts=4)
     save_maze(tmp_path / "m.json", maze)
     ref = run_trial(maze, 4, method.replace("_", "-"), np.random.SeedSequence(seed))
     server = build_server(str(tmp_path / "m.json"), {}, expect=4)
     names = ["a", "b", "c", "d"]
     starts = [list(s) for s in maze.starts[:4]]
-    out = await _run_team(server, names, [{"start": s} for s in starts], explore_maze,
-                          method=method, seed=seed, starts=starts, shape=list(maze.shape))
+    out = await _run_team(
+        server,
+        names,
+        [{"start": s} for s in starts],
+        explore_maze,
+        method=method,
+        seed=seed,
+        starts=starts,
+        shape=list(maze.shape),
+    )
     assert {o["rounds"] for o in out} == {ref["rounds"]}
     assert sum(o["moves"] for o in out) == ref["cost"]
 
 
 async def test_foraging_in_process_finishes(tmp_path: Path) -> None:
-    (tmp_path / "g.txt").write_text("........\n..R.....\n........\n....B...\n........\n"
-                                    ".#......\n......R.\n........\n")
+    (tmp_path / "g.txt").write_text(
+        "........\n..R.....\n........\n....B...\n........\n.#......\n......R.\n........\n"
+    )
     server = build_server(str(tmp_path / "g.txt"), {}, expect=3)
     server.world.resources = [q * 200 for q in server.world.resources]
     server.world.remaining = sum(server.world.resources)
-    out = await _run_team(server, ["x", "y", "z"], [{"view": 0}] * 3, foraging,
-                          method="marking", seed=2)
+    out = await _run_team(
+        server, ["x", "y", "z"], [{"view": 0}] * 3, foraging, method="marking", seed=2
+    )
     assert all(o["finished"] for o in out) and server.world.remaining == 0
     text = server.snapshot_text()
     assert text.startswith("round ") and "remaining 0" in text
 
 
-@pytest.mark.parametrize(("size", "n", "quantity", "seed", "method"),
-                         [(12, 4, 300, 1, "cmarking"), (12, 3, 300, 4, "ants")])
+@pytest.mark.parametrize(
+    ("size", "n", "quantity", "seed", "method"),
+    [(12, 4, 300, 1, "cmarking"), (12, 3, 300, 4, "ants")],
+)
 async def test_sequential_turns_repeat_the_in_process_foraging_run(
-        tmp_path: Path, size: int, n: int, quantity: int, seed: int, method: str) -> None:
+    tmp_path: Path, size: int, n: int, quantity: int, seed: int, method: str
+) -> None:
     from programs.foraging_experiment import Setup, run_trial
     from sim_hw.grid import place_resources, random_obstacles
     from tests.distributed._grid import write_grid
@@ -190,8 +216,13 @@ async def test_sequential_turns_repeat_the_in_process_foraging_run(
     grid = random_obstacles(size, size, 0.05, env, keep_free=(base,))
     resources = place_resources(grid, 2, quantity, env, exclude=(base,))
     path = write_grid(tmp_path / "field.json", grid.obstacles, base, resources)
-    server = build_server(str(path), {"pheromone": method == "ants"}, expect=n,
-                          turns="sequential")
-    out = await _run_team(server, [f"r{i}" for i in range(n)], [{"view": 0}] * n, foraging,
-                          method=method, seed=list(agent_seed))
+    server = build_server(str(path), {"pheromone": method == "ants"}, expect=n, turns="sequential")
+    out = await _run_team(
+        server,
+        [f"r{i}" for i in range(n)],
+        [{"view": 0}] * n,
+        foraging,
+        method=method,
+        seed=list(agent_seed),
+    )
     assert trial.finished and {o["rounds"] for o in out} == {trial.iterations}

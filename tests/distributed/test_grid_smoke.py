@@ -29,7 +29,8 @@ async def test_two_robots_join_tick_and_forage(tmp_path: Path) -> None:
         pose = await node.call("a", "robot.pose", timeout=5)
         assert pose == [0.0, 0.0, 0.0]
         outcomes = await asyncio.wait_for(
-            launch(node, "foraging", names, {"method": "cmarking", "seed": 1}, run="smoke"), 60)
+            launch(node, "foraging", names, {"method": "cmarking", "seed": 1}, run="smoke"), 60
+        )
         results = {n: o["result"] for n, o in outcomes.items()}
         assert all(r["finished"] for r in results.values()), outcomes
         assert len({r["rounds"] for r in results.values()}) == 1, "one round count for all"

@@ -51,8 +51,10 @@ async def _run_and_stop_one(tmp_path: Path, sig: signal.Signals, timeout: str) -
         assert "error" in outcomes["k1"]
         end = await node.call(WORLD, "state", timeout=5)
         assert end["remaining"] == 0 and sorted(end["robots"]) == ["k0", "k2", "k3"]
-        print(f"\n{sig.name}: k1 dropped {dropped_after * 1000:.0f} ms after the signal; the "
-              f"others finished in {survivors['k0']['rounds']} rounds")
+        print(
+            f"\n{sig.name}: k1 dropped {dropped_after * 1000:.0f} ms after the signal; the "
+            f"others finished in {survivors['k0']['rounds']} rounds"
+        )
 
 
 async def test_a_killed_robot_process_does_not_hang_the_grid_world(tmp_path: Path) -> None:
@@ -76,8 +78,15 @@ async def test_maze_survivors_finish_without_a_killed_member(tmp_path: Path) -> 
         await start_world(c, tmp_path / "maze.json", "--expect", "4")
         procs = await start_robots(c, names, [{"start": s} for s in starts])
         await node.team.wait_for([WORLD, *names], timeout=20)
-        run = asyncio.ensure_future(launch(node, "explore_maze", names, {
-            "seed": 3, "starts": starts, "shape": list(maze.shape)}, run="maze-kill"))
+        run = asyncio.ensure_future(
+            launch(
+                node,
+                "explore_maze",
+                names,
+                {"seed": 3, "starts": starts, "shape": list(maze.shape)},
+                run="maze-kill",
+            )
+        )
         async with asyncio.timeout(30):
             while (await node.call(WORLD, "state", timeout=5))["moves"].get("m1", 0) < 5:
                 await asyncio.sleep(0.02)

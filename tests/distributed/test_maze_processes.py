@@ -30,9 +30,22 @@ async def test_distributed_maze_run_matches_the_in_process_run(tmp_path: Path) -
         await start_robots(c, names, [{"start": s, "view": 2} for s in starts])
         await node.team.wait_for([WORLD, *names], timeout=20)
         t0 = time.monotonic()
-        outcomes = await asyncio.wait_for(launch(node, "explore_maze", names, {
-            "method": "cu_lvp", "seed": SEED, "starts": starts, "shape": list(maze.shape),
-            "snapshot_dir": str(tmp_path / "maps")}, run="maze"), 100)
+        outcomes = await asyncio.wait_for(
+            launch(
+                node,
+                "explore_maze",
+                names,
+                {
+                    "method": "cu_lvp",
+                    "seed": SEED,
+                    "starts": starts,
+                    "shape": list(maze.shape),
+                    "snapshot_dir": str(tmp_path / "maps"),
+                },
+                run="maze",
+            ),
+            100,
+        )
         took = time.monotonic() - t0
         results = {n: o.get("result") for n, o in outcomes.items()}
         assert all(r and r["finished"] for r in results.values()), outcomes
@@ -41,9 +54,11 @@ async def test_distributed_maze_run_matches_the_in_process_run(tmp_path: Path) -
     rounds = {r["rounds"] for r in results.values()}
     moves = sum(r["moves"] for r in results.values())
     sent = sum(r["sent_bytes"] for r in results.values())
-    print(f"\nmaze 20 (p=0.85), 4 robots: in-process {reference['rounds']} rounds, cost "
-          f"{reference['cost']}; distributed {rounds} rounds, cost {moves}, in {took:.1f} s; "
-          f"messages {sent} B (in-process {reference['comm_sent_kB'] * 1000:.0f} B)")
+    print(
+        f"\nmaze 20 (p=0.85), 4 robots: in-process {reference['rounds']} rounds, cost "
+        f"{reference['cost']}; distributed {rounds} rounds, cost {moves}, in {took:.1f} s; "
+        f"messages {sent} B (in-process {reference['comm_sent_kB'] * 1000:.0f} B)"
+    )
     assert rounds == {reference["rounds"]}
     assert moves == reference["cost"]
     assert sent == round(reference["comm_sent_kB"] * 1000)

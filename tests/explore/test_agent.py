@@ -201,8 +201,10 @@ def test_agents_sharing_a_region_split_it() -> None:
         messages = [msgpack.unpackb(msgpack.packb(a.outgoing_message())) for a in (helper, holder)]
         helper.observe(heard_messages=messages[1:])
         holder.observe(heard_messages=messages[:1])
-        return ([int(k) % 25 for k in helper.candidates().nonzero()[0]],
-                [int(k) % 25 for k in holder.candidates().nonzero()[0]])
+        return (
+            [int(k) % 25 for k in helper.candidates().nonzero()[0]],
+            [int(k) % 25 for k in holder.candidates().nonzero()[0]],
+        )
 
     # the holder, heard at 19, sees 17-21: of the unknown 13-16 and 22-23 only 13 is nearer
     # the helper at 8; the holder keeps the rest

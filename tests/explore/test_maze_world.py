@@ -57,26 +57,34 @@ def test_obstacle_probability_sets_density() -> None:
 
 
 def test_star_sensor_sees_eight_rays_blocked_by_obstacles() -> None:
-    grid = np.array([
-        [1, 1, 1, 1, 1, 1, 1],
-        [1, 0, 0, 0, 0, 0, 1],
-        [1, 0, 1, 0, 0, 0, 1],
-        [1, 0, 0, 0, 1, 0, 1],
-        [1, 0, 0, 0, 0, 0, 1],
-        [1, 0, 0, 0, 0, 0, 1],
-        [1, 1, 1, 1, 1, 1, 1],
-    ])
+    grid = np.array(
+        [
+            [1, 1, 1, 1, 1, 1, 1],
+            [1, 0, 0, 0, 0, 0, 1],
+            [1, 0, 1, 0, 0, 0, 1],
+            [1, 0, 0, 0, 1, 0, 1],
+            [1, 0, 0, 0, 0, 0, 1],
+            [1, 0, 0, 0, 0, 0, 1],
+            [1, 1, 1, 1, 1, 1, 1],
+        ]
+    )
     seen = {(r, c): v for r, c, v in visible_cells(grid, (3, 3), reach=2)}
     expected = {
         (3, 3): 0,
-        (2, 3): 0, (1, 3): 0,  # up
-        (4, 3): 0, (5, 3): 0,  # down
-        (3, 2): 0, (3, 1): 0,  # left
+        (2, 3): 0,
+        (1, 3): 0,  # up
+        (4, 3): 0,
+        (5, 3): 0,  # down
+        (3, 2): 0,
+        (3, 1): 0,  # left
         (3, 4): 1,  # right: stopped by the obstacle it records; (3, 5) hidden
         (2, 2): 1,  # up-left: obstacle, (1, 1) hidden
-        (2, 4): 0, (1, 5): 0,  # up-right
-        (4, 2): 0, (5, 1): 0,  # down-left
-        (4, 4): 0, (5, 5): 0,  # down-right
+        (2, 4): 0,
+        (1, 5): 0,  # up-right
+        (4, 2): 0,
+        (5, 1): 0,  # down-left
+        (4, 4): 0,
+        (5, 5): 0,  # down-right
     }
     assert seen == expected
 

@@ -42,8 +42,21 @@ def _parse(*argv: str) -> argparse.Namespace:
 
 
 def test_runner_prints_tables_ranking_and_json(tmp_path, capsys) -> None:
-    args = _parse("--runs", "2", "--seed", "5", "--agents", "1,3", "--size", "12",
-                  "--methods", "cu-lvp,nf", "--out", str(tmp_path), "--json")
+    args = _parse(
+        "--runs",
+        "2",
+        "--seed",
+        "5",
+        "--agents",
+        "1,3",
+        "--size",
+        "12",
+        "--methods",
+        "cu-lvp,nf",
+        "--out",
+        str(tmp_path),
+        "--json",
+    )
     assert args.func(args) == 0
     out, err = capsys.readouterr()
     assert out.startswith("seed: 5\n")
@@ -54,21 +67,45 @@ def test_runner_prints_tables_ranking_and_json(tmp_path, capsys) -> None:
     assert len(data["runs"]) == 2 * 2 * 2 * 2
     assert (tmp_path / "maze_metrics.png").stat().st_size > 0
     assert (tmp_path / "maze_composite.png").exists()
-    again = _parse("--runs", "2", "--seed", "5", "--agents", "1,3", "--size", "12",
-                   "--methods", "cu-lvp,nf", "--no-plots", "--json")
+    again = _parse(
+        "--runs",
+        "2",
+        "--seed",
+        "5",
+        "--agents",
+        "1,3",
+        "--size",
+        "12",
+        "--methods",
+        "cu-lvp,nf",
+        "--no-plots",
+        "--json",
+    )
     again.func(again)
     rerun = json.loads(capsys.readouterr()[0].strip().splitlines()[-1])
-    strip = [{k: v for k, v in r.items() if k not in ("step_ms", "time_s")}
-             for r in data["runs"]]
-    assert strip == [{k: v for k, v in r.items() if k not in ("step_ms", "time_s")}
-                     for r in rerun["runs"]]
+    strip = [{k: v for k, v in r.items() if k not in ("step_ms", "time_s")} for r in data["runs"]]
+    assert strip == [
+        {k: v for k, v in r.items() if k not in ("step_ms", "time_s")} for r in rerun["runs"]
+    ]
 
 
 def test_runner_on_a_maze_file(tmp_path, capsys) -> None:
     path = tmp_path / "m.json"
     save_maze(path, generate_maze(12, 0.5, np.random.default_rng(2), n_starts=3))
-    args = _parse("--maze", str(path), "--runs", "1", "--agents", "3", "--seed", "1",
-                  "--methods", "cu-lvp", "--no-plots", "--json")
+    args = _parse(
+        "--maze",
+        str(path),
+        "--runs",
+        "1",
+        "--agents",
+        "3",
+        "--seed",
+        "1",
+        "--methods",
+        "cu-lvp",
+        "--no-plots",
+        "--json",
+    )
     assert args.func(args) == 0
     runs = json.loads(capsys.readouterr()[0].strip().splitlines()[-1])["runs"]
     assert runs[0]["complete"]
@@ -86,8 +123,9 @@ def test_runner_on_a_maze_file(tmp_path, capsys) -> None:
 def test_two_agents_meeting_in_corridors_do_not_livelock(run: int, method: str) -> None:
     # Seeded mazes where two agents once met head-on and waited for, or danced around, each
     # other until the round cap (experiment seed 2026, p = 0.85, 2 agents).
-    maze = generate_maze(30, 0.85, np.random.default_rng(np.random.SeedSequence(
-        [2026, 30, 850, run])), n_starts=20)
+    maze = generate_maze(
+        30, 0.85, np.random.default_rng(np.random.SeedSequence([2026, 30, 850, run])), n_starts=20
+    )
     seed = np.random.SeedSequence([2026, 30, 850, run, 2, list(METHODS).index(method)])
     res = run_trial(maze, 2, method, seed, max_rounds=1500)
     assert res["complete"]
@@ -96,8 +134,9 @@ def test_two_agents_meeting_in_corridors_do_not_livelock(run: int, method: str) 
 def test_hedac_agents_caught_in_a_two_cell_cycle_break_out() -> None:
     # Experiment seed 2026, p = 0.85, maze 6, 15 agents: with relays all fifteen HEDAC agents
     # once went back and forth between two cells each, with 19 cells left, until the cap.
-    maze = generate_maze(30, 0.85, np.random.default_rng(np.random.SeedSequence(
-        [2026, 30, 850, 6])), n_starts=20)
+    maze = generate_maze(
+        30, 0.85, np.random.default_rng(np.random.SeedSequence([2026, 30, 850, 6])), n_starts=20
+    )
     seed = np.random.SeedSequence([2026, 30, 850, 6, 15, list(METHODS).index("hedac")])
     res = run_trial(maze, 15, "hedac", seed, max_rounds=400, exchanges=3)
     assert res["complete"]

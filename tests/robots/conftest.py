@@ -26,16 +26,18 @@ def demo() -> WorldSpec:
     return load_world(DEMO)
 
 
-async def robots_in(world: World, settings: dict[str, dict[str, Any] | None],
-                    **kwargs: Any) -> tuple[WorldServer, dict[str, Robot]]:
+async def robots_in(
+    world: World, settings: dict[str, dict[str, Any] | None], **kwargs: Any
+) -> tuple[WorldServer, dict[str, Robot]]:
     """A lock-step server over ``world`` and a Robot (no node) for each id → settings."""
     server = WorldServer(world, expect=len(settings), **kwargs)
     hws = await asyncio.gather(*(in_process(server, rid, spec) for rid, spec in settings.items()))
     return server, {rid: Robot(rid, hw) for rid, hw in zip(settings, hws, strict=True)}
 
 
-async def together(jobs: dict[str, Callable[[], Awaitable[Any]]],
-                   robots: dict[str, Robot]) -> dict[str, Any]:
+async def together(
+    jobs: dict[str, Callable[[], Awaitable[Any]]], robots: dict[str, Robot]
+) -> dict[str, Any]:
     """Run one job per robot; a robot whose job is done keeps ticking (lock-step) until all
     are done."""
     everyone = asyncio.Event()
@@ -65,11 +67,15 @@ async def mesh() -> AsyncIterator[Callable[[Sequence[str]], Awaitable[list[Node]
         async def make(names: Sequence[str]) -> list[Node]:
             port = free_port()
             first = await stack.enter_async_context(
-                Node(names[0], team, config=NodeConfig(listen=(f"tcp/127.0.0.1:{port}",))))
+                Node(names[0], team, config=NodeConfig(listen=(f"tcp/127.0.0.1:{port}",)))
+            )
             out = [first]
             for name in names[1:]:
-                out.append(await stack.enter_async_context(Node(
-                    name, team, config=NodeConfig(connect=(f"tcp/127.0.0.1:{port}",)))))
+                out.append(
+                    await stack.enter_async_context(
+                        Node(name, team, config=NodeConfig(connect=(f"tcp/127.0.0.1:{port}",)))
+                    )
+                )
             for n in out:
                 await n.team.wait_for(set(names), timeout=10)
             return out

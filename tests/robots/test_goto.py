@@ -13,12 +13,16 @@ from sim_hw import World
 from .conftest import robots_in
 
 
-@pytest.mark.parametrize(("robot_id", "heading", "lateral"), [
-    ("ernst", 0.0, 0.42),  # straight ahead, to the left corner of the rear face
-    ("moseley", math.pi, -0.42),  # round the box, to its far (east) face
-])
-async def test_goto_object_ends_against_the_object(demo, robot_id: str, heading: float,
-                                                   lateral: float) -> None:
+@pytest.mark.parametrize(
+    ("robot_id", "heading", "lateral"),
+    [
+        ("ernst", 0.0, 0.42),  # straight ahead, to the left corner of the rear face
+        ("moseley", math.pi, -0.42),  # round the box, to its far (east) face
+    ],
+)
+async def test_goto_object_ends_against_the_object(
+    demo, robot_id: str, heading: float, lateral: float
+) -> None:
     world = World(demo, seed=1)
     server, robots = await robots_in(world, {robot_id: None})
     robot = robots[robot_id]
@@ -29,8 +33,10 @@ async def test_goto_object_ends_against_the_object(demo, robot_id: str, heading:
     # the expected place: touching the face (half depth 0.3 + radius 0.15), lateral to its left
     ex = bx - math.cos(heading) * 0.45 - math.sin(heading) * lateral
     ey = by - math.sin(heading) * 0.45 + math.cos(heading) * lateral
-    print(f"\ngoto_object ({robot_id}): {robot.hw.clock.now():.1f} s, at ({x:.3f}, {y:.3f}, "
-          f"{th:.3f}), expected ({ex:.3f}, {ey:.3f}, {heading:.3f}), {got}")
+    print(
+        f"\ngoto_object ({robot_id}): {robot.hw.clock.now():.1f} s, at ({x:.3f}, {y:.3f}, "
+        f"{th:.3f}), expected ({ex:.3f}, {ey:.3f}, {heading:.3f}), {got}"
+    )
     await server.aclose()
     assert got["arrived"] and got["contact"]
     assert math.dist((x, y), (ex, ey)) < 0.08

@@ -23,18 +23,25 @@ def along(world: World, path: Path) -> float:
 
 async def test_pusher_and_steerer_move_the_box_along_the_path(demo) -> None:
     world = World(demo, seed=1)
-    settings = {"elvis": {"pose": [REAR, BOX[1] - 0.42, 0.0]},  # right corner: pusher
-                "ernst": {"pose": [REAR, BOX[1] + 0.42, 0.0]}}  # left corner: steerer
+    settings = {
+        "elvis": {"pose": [REAR, BOX[1] - 0.42, 0.0]},  # right corner: pusher
+        "ernst": {"pose": [REAR, BOX[1] + 0.42, 0.0]},
+    }  # left corner: steerer
     server, robots = await robots_in(world, settings)
     path = Path.relative(BOX, [(3.0, 0.0)])
-    results = await together({
-        "elvis": lambda: pusher(robots["elvis"], path, object_id="victim", timeout=40.0),
-        "ernst": lambda: steerer(robots["ernst"], path, 0.42, object_id="victim", timeout=40.0),
-    }, robots)
+    results = await together(
+        {
+            "elvis": lambda: pusher(robots["elvis"], path, object_id="victim", timeout=40.0),
+            "ernst": lambda: steerer(robots["ernst"], path, 0.42, object_id="victim", timeout=40.0),
+        },
+        robots,
+    )
     x, y, th = world.box_pose("victim")
     t = robots["elvis"].hw.clock.now()
-    print(f"\npusher+steerer: box at ({x:.2f}, {y:.2f}, {th:.3f}) after {t:.1f} s simulated, "
-          f"{along(world, path):.2f} m along the path; {results}")
+    print(
+        f"\npusher+steerer: box at ({x:.2f}, {y:.2f}, {th:.3f}) after {t:.1f} s simulated, "
+        f"{along(world, path):.2f} m along the path; {results}"
+    )
     await server.aclose()
     assert along(world, path) >= 2.0
     assert abs(y - BOX[1]) < 0.25 and abs(th) < 0.2
@@ -43,14 +50,19 @@ async def test_pusher_and_steerer_move_the_box_along_the_path(demo) -> None:
 
 async def test_a_curved_path(demo) -> None:
     world = World(demo, seed=1)
-    settings = {"elvis": {"pose": [REAR, BOX[1] - 0.42, 0.0]},
-                "ernst": {"pose": [REAR, BOX[1] + 0.42, 0.0]}}
+    settings = {
+        "elvis": {"pose": [REAR, BOX[1] - 0.42, 0.0]},
+        "ernst": {"pose": [REAR, BOX[1] + 0.42, 0.0]},
+    }
     server, robots = await robots_in(world, settings)
     path = Path.relative(BOX, [(1.5, 0.0), (2.6, 0.8)])
-    await together({
-        "elvis": lambda: pusher(robots["elvis"], path, object_id="victim", timeout=40.0),
-        "ernst": lambda: steerer(robots["ernst"], path, 0.42, object_id="victim", timeout=40.0),
-    }, robots)
+    await together(
+        {
+            "elvis": lambda: pusher(robots["elvis"], path, object_id="victim", timeout=40.0),
+            "ernst": lambda: steerer(robots["ernst"], path, 0.42, object_id="victim", timeout=40.0),
+        },
+        robots,
+    )
     x, y, th = world.box_pose("victim")
     print(f"\ncurved path: box at ({x:.2f}, {y:.2f}, {th:.3f}), path ends at (7.1, 3.8)")
     await server.aclose()
@@ -63,8 +75,10 @@ async def test_one_robot_alone_does_not_translate_the_box(demo) -> None:
     path = Path.relative(BOX, [(3.0, 0.0)])
     result = await pusher(robots["elvis"], path, object_id="victim", timeout=15.0)
     x, y, th = world.box_pose("victim")
-    print(f"\npusher alone: box at ({x:.2f}, {y:.2f}, {th:.3f}) after 15 s, "
-          f"{along(world, path):.2f} m along the path; {result}")
+    print(
+        f"\npusher alone: box at ({x:.2f}, {y:.2f}, {th:.3f}) after 15 s, "
+        f"{along(world, path):.2f} m along the path; {result}"
+    )
     await server.aclose()
     assert along(world, path) < 0.5  # two robots go 3 m in ~10 s; alone it only pivots
     assert not result["done"]

@@ -102,7 +102,8 @@ def test_kind_ahead_and_locate_use_the_nearest_thing_in_front() -> None:
     ident, (x, y) = locate((1.0, 1.0, math.pi / 2), sightings, 0.15)
     assert ident == "victim"
     assert x == pytest.approx(1.0 - 0.6 * math.sin(0.2)) and y == pytest.approx(
-        1.0 + 0.6 * math.cos(0.2))
+        1.0 + 0.6 * math.cos(0.2)
+    )
     assert locate((0.0, 0.0, 0.0), [], 0.15) == (None, pytest.approx((0.45, 0.0)))
 
 
@@ -170,19 +171,25 @@ def test_path_progress_cross_track_and_heading() -> None:
 
 def test_stations_put_the_finder_at_the_right_corner_as_pusher() -> None:
     roles = stations("moseley", ["elvis", "ernst", "moseley"], 1.2)
-    assert roles == {"moseley": ("pusher", pytest.approx(-0.42)),
-                     "elvis": ("steerer", pytest.approx(0.0)),
-                     "ernst": ("steerer", pytest.approx(0.42))}
-    assert stations("a", ["a", "b"], 0.6) == {"a": ("pusher", pytest.approx(-0.12)),
-                                              "b": ("steerer", pytest.approx(0.12))}
+    assert roles == {
+        "moseley": ("pusher", pytest.approx(-0.42)),
+        "elvis": ("steerer", pytest.approx(0.0)),
+        "ernst": ("steerer", pytest.approx(0.42)),
+    }
+    assert stations("a", ["a", "b"], 0.6) == {
+        "a": ("pusher", pytest.approx(-0.12)),
+        "b": ("steerer", pytest.approx(0.12)),
+    }
 
 
 def test_object_pose_from_a_sighting() -> None:
     # a robot at the right rear corner sees the centre 45° to its left
     s = seen("box", "victim", math.hypot(0.4, 0.4), math.pi / 4)
     x, y, h = object_pose((0.0, 0.0, 0.1), s, math.pi / 4)
-    assert (x, y) == (pytest.approx(0.4 * math.sqrt(2) * math.cos(math.pi / 4 + 0.1)),
-                      pytest.approx(0.4 * math.sqrt(2) * math.sin(math.pi / 4 + 0.1)))
+    assert (x, y) == (
+        pytest.approx(0.4 * math.sqrt(2) * math.cos(math.pi / 4 + 0.1)),
+        pytest.approx(0.4 * math.sqrt(2) * math.sin(math.pi / 4 + 0.1)),
+    )
     assert h == pytest.approx(0.1)
 
 

@@ -23,8 +23,9 @@ def spying(predicate, log: list[tuple[str | None, bool]], by_id: bool = False):
     async def spy(robot: Robot) -> bool:
         cam = robot.hw.camera
         sightings = cam.sightings() if cam is not None else ()
-        what = locate(robot.hw.odometry.pose(), sightings, 0.15)[0] if by_id else kind_ahead(
-            sightings)
+        what = (
+            locate(robot.hw.odometry.pose(), sightings, 0.15)[0] if by_id else kind_ahead(sightings)
+        )
         verdict = await predicate(robot)
         log.append((what or "wall", verdict))
         return verdict
@@ -33,14 +34,19 @@ def spying(predicate, log: list[tuple[str | None, bool]], by_id: bool = False):
 
 
 @pytest.mark.parametrize(("robot_id", "seed"), [("ernst", 0), ("elvis", 5), ("moseley", 7)])
-async def test_search_finds_the_box_and_ignores_walls_and_immovables(demo, robot_id: str,
-                                                                   seed: int) -> None:
+async def test_search_finds_the_box_and_ignores_walls_and_immovables(
+    demo, robot_id: str, seed: int
+) -> None:
     world = World(demo, seed=seed)
     server, robots = await robots_in(world, {robot_id: None})
     robot = robots[robot_id]
     checks: list[tuple[str | None, bool]] = []
-    found = await search(robot, spying(sees("box"), checks), rng=random.Random(seed),
-                         terminator=lambda: robot.hw.clock.now() > 600)
+    found = await search(
+        robot,
+        spying(sees("box"), checks),
+        rng=random.Random(seed),
+        terminator=lambda: robot.hw.clock.now() > 600,
+    )
     print(f"\nsearch ({robot_id}, seed {seed}): {robot.hw.clock.now():.1f} s, checks {checks}")
     await server.aclose()
     assert found is not None and found.object_id == "victim"
@@ -58,8 +64,10 @@ async def test_search_gives_up_when_the_terminator_says_so(demo) -> None:
     async def never(_: Robot) -> bool:
         return False
 
-    assert await search(robot, never, lambda: robot.hw.clock.now() > 20.0,
-                        rng=random.Random(0)) is None
+    assert (
+        await search(robot, never, lambda: robot.hw.clock.now() > 20.0, rng=random.Random(0))
+        is None
+    )
     await server.aclose()
 
 
@@ -67,18 +75,23 @@ async def test_search_gives_up_when_the_terminator_says_so(demo) -> None:
 # a wall, an immovable pillar, and the demo's 2-robot box (which one robot cannot move).
 PUSHED = WorldSpec(
     size=(8.0, 8.0),
-    boxes=(BoxSpec("crate", (2.0, 2.0), (0.4, 0.4), 5.0, 0.5),
-           BoxSpec("victim", (2.0, 6.0), (0.6, 1.2), 20.0, 0.5)),
+    boxes=(
+        BoxSpec("crate", (2.0, 2.0), (0.4, 0.4), 5.0, 0.5),
+        BoxSpec("victim", (2.0, 6.0), (0.6, 1.2), 20.0, 0.5),
+    ),
     immovables=(ImmovableSpec("pillar", (6.0, 2.0), size=(0.6, 0.6)),),
 )
 
 
-@pytest.mark.parametrize(("target", "expected"), [
-    ((2.0, 2.0), True),  # the crate
-    ((6.0, 2.0), False),  # the pillar
-    ((7.8, 5.0), False),  # the east wall
-    ((2.0, 6.0), False),  # the 2-robot box: one robot cannot move it, even off-centre
-])
+@pytest.mark.parametrize(
+    ("target", "expected"),
+    [
+        ((2.0, 2.0), True),  # the crate
+        ((6.0, 2.0), False),  # the pillar
+        ((7.8, 5.0), False),  # the east wall
+        ((2.0, 6.0), False),  # the 2-robot box: one robot cannot move it, even off-centre
+    ],
+)
 async def test_movable_is_the_push_test(target, expected: bool) -> None:
     x0, y0 = target[0] - 1.2, target[1] + 0.12  # a little off-centre
     server, robots = await robots_in(World(PUSHED), {"r": {"pose": [x0, y0, 0.0]}})
@@ -93,16 +106,24 @@ async def test_movable_is_the_push_test(target, expected: bool) -> None:
 async def test_search_with_the_push_test_finds_the_crate(seed: int) -> None:
     """The paper's own recognition end to end: the crate gives under one robot's medium push;
     walls, the pillar and the 2-robot box do not."""
-    small = WorldSpec(size=(5.0, 5.0),
-                      boxes=(BoxSpec("crate", (1.0, 4.0), (0.4, 0.4), 5.0),
-                             BoxSpec("victim", (3.5, 3.5), (0.6, 1.2), 20.0)),
-                      immovables=(ImmovableSpec("pillar", (4.0, 1.0), size=(0.6, 0.6)),))
+    small = WorldSpec(
+        size=(5.0, 5.0),
+        boxes=(
+            BoxSpec("crate", (1.0, 4.0), (0.4, 0.4), 5.0),
+            BoxSpec("victim", (3.5, 3.5), (0.6, 1.2), 20.0),
+        ),
+        immovables=(ImmovableSpec("pillar", (4.0, 1.0), size=(0.6, 0.6)),),
+    )
     world = World(small, seed=seed)
     server, robots = await robots_in(world, {"r": {"pose": [2.0, 2.0, 0.0]}})
     robot = robots["r"]
     checks: list[tuple[str | None, bool]] = []
-    found = await search(robot, spying(movable, checks, by_id=True), rng=random.Random(seed),
-                         terminator=lambda: robot.hw.clock.now() > 900)
+    found = await search(
+        robot,
+        spying(movable, checks, by_id=True),
+        rng=random.Random(seed),
+        terminator=lambda: robot.hw.clock.now() > 900,
+    )
     print(f"\nsearch by push: {robot.hw.clock.now():.1f} s, checks {checks}")
     await server.aclose()
     assert found is not None and found.object_id == "crate"

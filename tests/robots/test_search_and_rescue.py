@@ -34,8 +34,9 @@ async def test_three_robots_find_gather_and_move_the_box(demo, mesh, seed: int) 
 
     async def listen() -> None:
         async for m in sub:
-            reports.append((world.time, time.perf_counter() - start, m.data["member"],
-                            m.data["phase"]))
+            reports.append(
+                (world.time, time.perf_counter() - start, m.data["member"], m.data["phase"])
+            )
 
     listener = asyncio.ensure_future(listen())
     goal = next(m.center for m in demo.markers if m.id == "goal")
@@ -45,8 +46,9 @@ async def test_three_robots_find_gather_and_move_the_box(demo, mesh, seed: int) 
         async with contextlib.AsyncExitStack() as idle:
             for hw in hws:  # what an idle robot process does in a lock-step world: keep ticking
                 await idle.enter_async_context(hw.clock.ticking())
-            outcomes = await launch(ws, "search_and_rescue", list(NAMES),
-                                    {"path": path, "seed": seed}, run="sr")
+            outcomes = await launch(
+                ws, "search_and_rescue", list(NAMES), {"path": path, "seed": seed}, run="sr"
+            )
             wall = time.perf_counter() - start
             sim = world.time
             await server.aclose()
@@ -55,10 +57,13 @@ async def test_three_robots_find_gather_and_move_the_box(demo, mesh, seed: int) 
     await asyncio.gather(listener, return_exceptions=True)
     box = world.box_pose("victim")
     along = ((box[0] - box0[0]) * path[0][0] + (box[1] - box0[1]) * path[0][1]) / math.hypot(
-        *path[0])
-    print(f"\nsearch and rescue: {sim:.1f} s simulated, {wall:.1f} s wall; the box moved "
-          f"{math.dist(box[:2], box0[:2]):.2f} m ({along:.2f} m along the path), "
-          f"to ({box[0]:.2f}, {box[1]:.2f}) for a goal at {goal}")
+        *path[0]
+    )
+    print(
+        f"\nsearch and rescue: {sim:.1f} s simulated, {wall:.1f} s wall; the box moved "
+        f"{math.dist(box[:2], box0[:2]):.2f} m ({along:.2f} m along the path), "
+        f"to ({box[0]:.2f}, {box[1]:.2f}) for a goal at {goal}"
+    )
     for t, w, member, phase in sorted(reports):
         print(f"  sim {t:6.1f} s  wall {w:5.2f} s  {member:8s} {phase}")
     for name, out in outcomes.items():
