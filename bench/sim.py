@@ -4,9 +4,9 @@
 
 (a) the world alone: 10, 50, 200 in-process robots (8 sonar rays at 10 Hz, no camera, a
 trivial bounce-off-walls controller) through the lock-step WorldServer and the in-process HAL;
-(b) 10 and 50 robot processes (``python -m sim_hw._walker``) driving a random walk through the
-remote HAL over zenoh on 127.0.0.1, the world hosted in this process. Time is counted from the
-first tick to the last, so process start-up is left out.
+(b) 10 and 50 robot processes (``python -m sim_hw.continuous._walker``) driving a random walk
+through the remote HAL over zenoh on 127.0.0.1, the world hosted in this process. Time is
+counted from the first tick to the last, so process start-up is left out.
 
 The last line is one JSON object: rtf_world_10, rtf_world_50, rtf_world_200, rtf_procs_10,
 rtf_procs_50 (null where not measured).
@@ -98,7 +98,7 @@ async def processes(n: int, seconds: float) -> float:
             await asyncio.create_subprocess_exec(
                 sys.executable,
                 "-m",
-                "sim_hw._walker",
+                "sim_hw.continuous._walker",
                 f"r{i:03d}",
                 "--seed",
                 str(i),

@@ -28,7 +28,7 @@ import msgpack
 import numpy as np
 
 from robots.explore import EXCHANGES, METHODS, ExplorerAgent, make_team
-from sim_hw.maze import FREE, Maze, MazeFileError, MazeWorld, generate_maze, load_maze
+from sim_hw.grid._maze import FREE, Maze, MazeFileError, MazeWorld, generate_maze, load_maze
 
 AGENT_COUNTS = (1, 2, 4, 6, 8, 10, 15, 20)
 PROBABILITIES = (0.85, 0.15)
@@ -49,7 +49,7 @@ EXTRA = (
 
 def observable(grid: np.ndarray, starts: list[tuple[int, int]], reach: int = 2) -> np.ndarray:
     """Inner cells the star sensor can see from some free cell reachable from a start."""
-    from sim_hw.maze import visible_cells
+    from sim_hw.grid._maze import visible_cells
 
     _rows, _cols = grid.shape
     seen = np.zeros(grid.shape, dtype=bool)

@@ -6,7 +6,7 @@ amount, base, pheromone), the cells seen along its view rays (the star sensor of
 papers), and then acts once: writes its cell, picks or drops resource units, moves one cell or
 stays. ``await clock.tick()`` hands the round's action in and returns once the world has
 advanced one round. As in ``robots.hal``, the protocols belong to the code that uses them;
-``sim_hw.grid_remote`` implements them over a grid world process.
+``sim_hw.grid._hardware`` implements them over a grid world process.
 
 Conventions:
 

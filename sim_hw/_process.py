@@ -11,7 +11,7 @@ import asyncio
 import logging
 from typing import Any
 
-from ._server import WorldServer
+from sim_hw.continuous._server import WorldServer
 
 log = logging.getLogger("sim_hw.process")
 

@@ -16,10 +16,10 @@ from programs.foraging import foraging
 from programs.maze_experiment import run_trial
 from robots.grid_hal import FREE, OBSTACLE, OCCUPIED
 from sim_hw.grid import Grid, GridWorld
-from sim_hw.grid_cli import build_server
-from sim_hw.grid_remote import in_process
-from sim_hw.grid_server import GridServer, RobotDropped
-from sim_hw.maze import generate_maze, save_maze
+from sim_hw.grid._hardware import in_process
+from sim_hw.grid._maze import generate_maze, save_maze
+from sim_hw.grid._server import GridServer, RobotDropped
+from sim_hw.grid.cli import build_server
 
 EAST, WEST = 1, 3
 
@@ -68,7 +68,7 @@ async def test_a_silent_robot_is_dropped_after_the_timeout(
 ) -> None:
     server = corridor_server(expect=2, timeout=0.05)
     await asyncio.gather(server.join("a", {}), server.join("b", {}))
-    with caplog.at_level(logging.WARNING, logger="sim_hw.grid_server"):
+    with caplog.at_level(logging.WARNING, logger="sim_hw.grid._server"):
         reply = await asyncio.wait_for(server.step("a", 0, {}), 2)
     assert reply["round"] == 1 and server.dropped == ["b"]
     assert "robot b sent no action for round 0" in caplog.text

@@ -15,7 +15,7 @@ from robots.explore import (
     unexplored_in_view,
     voronoi_partition,
 )
-from sim_hw.maze import generate_maze, visible_cells
+from sim_hw.grid._maze import generate_maze, visible_cells
 
 
 def test_voronoi_regions_cover_free_cells_without_overlap() -> None:
@@ -96,7 +96,7 @@ def test_agent_never_plans_into_a_known_obstacle() -> None:
 
 
 def test_cu_lvp_goals_stay_inside_the_agents_regions() -> None:
-    from sim_hw.maze import MazeWorld
+    from sim_hw.grid._maze import MazeWorld
 
     maze = generate_maze(30, 0.85, np.random.default_rng(11), n_starts=6)
     world = MazeWorld(maze, 6)

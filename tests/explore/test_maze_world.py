@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 
-from sim_hw.maze import (
+from sim_hw.grid._maze import (
     Maze,
     MazeFileError,
     MazeWorld,

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from sim_hw import RobotDropped, World, WorldServer, in_process, random_obstacles
-from sim_hw._walker import random_walk
+from sim_hw.continuous._walker import random_walk
 
 NOISY = {"sonar": {"noise": 0.02}, "odometry": {"trans_noise": 0.05, "drift": 0.02}}
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from sim_hw import BoxSpec, ImmovableSpec, RobotSpec, World, WorldSpec
-from sim_hw._bodies import GRAVITY
+from sim_hw.continuous._bodies import GRAVITY
 
 from .conftest import start
 

@@ -17,7 +17,7 @@ from sim_hw import (
     load_world,
     read_recording,
 )
-from sim_hw._walker import random_walk
+from sim_hw.continuous._walker import random_walk
 
 WORLDS = Path(__file__).parents[2] / "worlds"
 

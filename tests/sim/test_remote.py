@@ -1,7 +1,8 @@
 """The remote backend: real OS processes over zenoh on 127.0.0.1 (multicast scouting off).
 
-A world process (``mover world --lockstep``) and robot processes (``python -m sim_hw._walker``)
-on free ports; the same walkers in process must give the same trajectories, bit for bit.
+A world process (``mover world --lockstep``) and robot processes
+(``python -m sim_hw.continuous._walker``) on free ports; the same walkers in
+process must give the same trajectories, bit for bit.
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ import pytest
 from mover import Node, NodeConfig, Team, free_port
 from mover._cli import main
 from sim_hw import World, WorldServer, in_process, load_world, read_recording
-from sim_hw._walker import random_walk
+from sim_hw.continuous._walker import random_walk
 
 pytestmark = pytest.mark.timeout(90)
 
@@ -80,7 +81,7 @@ class Procs:
     async def walker(self, robot: str, seed: int, ticks: int, out: Path):
         return await self.start(
             "-m",
-            "sim_hw._walker",
+            "sim_hw.continuous._walker",
             robot,
             "--seed",
             str(seed),

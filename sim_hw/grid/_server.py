@@ -39,9 +39,9 @@ import numpy as np
 
 from robots.grid_hal import FREE, OBSTACLE, OCCUPIED, OFFSETS
 from sim_hw.grid import Cell, GridWorld
-from sim_hw.maze import visible_cells
+from sim_hw.grid._maze import visible_cells
 
-log = logging.getLogger("sim_hw.grid_server")
+log = logging.getLogger("sim_hw.grid._server")
 
 UNTIL = ("exhausted", "delivered", "explored", "never")
 Readings = dict[str, Any]

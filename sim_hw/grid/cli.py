@@ -2,7 +2,7 @@
 
 FILE is a grid file (``#``/``.`` text with optional ``B`` base and ``R`` resources, or the
 grid JSON of ``sim_hw.grid``) or a maze JSON (``{"grid": ..., "starts": ...}``, as
-``sim_hw.maze.save_maze`` writes). A maze is served as the maze papers have it: one robot per
+``sim_hw.grid._maze.save_maze`` writes). A maze is served as the maze papers have it: one robot per
 cell, robots placed on the starts in name order, a radio of 25 % of the larger side measured
 in Manhattan distance, and a run that is over once everything the robots can see was seen.
 
@@ -28,7 +28,7 @@ from typing import Any
 
 from mover._cli import UsageError
 
-log = logging.getLogger("sim_hw.grid_cli")
+log = logging.getLogger("sim_hw.grid.cli")
 
 
 def register(sub: Any) -> None:
@@ -95,14 +95,14 @@ def build_server(
     until: str | None = None,
     turns: str = "together",
 ) -> Any:
-    """The :class:`~sim_hw.grid_server.GridServer` that FILE and the layout describe."""
+    """The :class:`~sim_hw.grid._server.GridServer` that FILE and the layout describe."""
     import numpy as np
 
     from sim_hw.grid import Grid, GridFileError, GridWorld, PheromoneField, load_layout
     from sim_hw.grid import place_resources as place
-    from sim_hw.maze import MazeFileError, broadcast_range, load_maze
+    from sim_hw.grid._maze import MazeFileError, broadcast_range, load_maze
 
-    from .grid_server import GridServer
+    from ._server import GridServer
 
     p = Path(path)
     settings: dict[str, Any] = {}
@@ -203,7 +203,7 @@ async def serve(
     """Open a node named ``name``, serve ``server`` and run until cancelled (or empty)."""
     from mover import Node
 
-    from .grid_server import serve_grid
+    from ._server import serve_grid
 
     async with Node(name, team=team, kind="world", config=config) as node:
         serve_grid(node, server)

@@ -4,8 +4,8 @@ It shows the shape of a robot process on the HAL — read sensors, decide, set t
 tick — and records the robot's true pose each tick (through the radio locator, which real
 behaviours must not use) so that runs can be compared.
 
-Run as a process: ``python -m sim_hw._walker ROBOT --seed N --ticks T [--out FILE]``; it joins
-the world process over mover (``MOVER_CONNECT`` etc. from the environment).
+Run as a process: ``python -m sim_hw.continuous._walker ROBOT --seed N --ticks T [--out FILE]``;
+it joins the world process over mover (``MOVER_CONNECT`` etc. from the environment).
 """
 
 from __future__ import annotations

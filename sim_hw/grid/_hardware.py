@@ -232,7 +232,7 @@ class _View:
 async def in_process(
     server: Any, robot_id: str, spec: dict[str, Any] | None = None, *, idle_period: float = 0.0
 ) -> GridHardware:
-    """Join ``server`` (a :class:`~sim_hw.grid_server.GridServer` in this process)."""
+    """Join ``server`` (a :class:`~sim_hw.grid._server.GridServer` in this process)."""
     joined = await server.join(robot_id, spec)
 
     async def exchange(round: int, action: dict[str, Any]) -> dict[str, Any]:
@@ -258,7 +258,7 @@ async def connect(
     perception``. ``call_timeout`` must outlast the world's drop timeout. The robot's id must
     be its node's name: the world drops the robot when that member leaves the team.
     """
-    from sim_hw._hardware import world_caller
+    from sim_hw.continuous._hardware import world_caller
 
     call = world_caller(node, world, call_timeout)
     joined = await call("join", robot_id, spec or {})

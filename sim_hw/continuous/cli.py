@@ -15,7 +15,7 @@ from typing import Any
 
 from mover._cli import UsageError
 
-log = logging.getLogger("sim_hw.cli")
+log = logging.getLogger("sim_hw.continuous.cli")
 
 
 def _positive(text: str) -> float:
@@ -79,9 +79,9 @@ def register_world(sub: Any) -> None:
 def run_world(args: argparse.Namespace) -> int:
     """Run a world process until interrupted (or --until, --quit-when-empty)."""
     from mover import NodeConfig, Team
+    from sim_hw._process import run_world_process
 
     from . import Recorder, WorldFileError, WorldServer, load_world
-    from ._process import run_world_process
     from ._world import TICK, World
 
     try:

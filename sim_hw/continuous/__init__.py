@@ -1,0 +1,64 @@
+"""Simulated hardware for mover robots: a continuous pymunk world behind the robots' HAL.
+
+Public face (everything else is private and may change):
+
+* world description — :class:`WorldSpec` and its parts, :func:`load_world`, the generators
+  :func:`random_obstacles` and :func:`double_corridor`, and :class:`WorldFileError`;
+* the world — :class:`World` (synchronous, deterministic) and :class:`WorldServer` (its clock:
+  lock-step or real time; robots ``join``, ``step`` and ``leave``);
+* backends of ``robots.hal`` — :func:`in_process` and :func:`remote` (over a ``mover.Node``),
+  both built on :class:`SimHardware`;
+* recording — :class:`Recorder`, :func:`read_recording`, :func:`plot_recording`;
+* the world process — :func:`serve_world` (exports the world over zenoh).
+"""
+
+from sim_hw._process import serve_world
+
+from ._generate import double_corridor, random_obstacles
+from ._hardware import SimHardware, in_process, remote
+from ._record import Recorder, plot_recording, read_recording
+from ._server import RobotDropped, WorldServer
+from ._spec import (
+    BoxSpec,
+    CameraSpec,
+    ImmovableSpec,
+    MarkerSpec,
+    ObstacleSpec,
+    OdometrySpec,
+    RobotSpec,
+    SonarSpec,
+    WorldSpec,
+)
+from ._world import DT, STEPS_PER_TICK, TICK, World
+from ._worldfile import WorldFileError, load_world, parse_robot, parse_world
+
+__all__ = [
+    "DT",
+    "STEPS_PER_TICK",
+    "TICK",
+    "BoxSpec",
+    "CameraSpec",
+    "ImmovableSpec",
+    "MarkerSpec",
+    "ObstacleSpec",
+    "OdometrySpec",
+    "Recorder",
+    "RobotDropped",
+    "RobotSpec",
+    "SimHardware",
+    "SonarSpec",
+    "World",
+    "WorldFileError",
+    "WorldServer",
+    "WorldSpec",
+    "double_corridor",
+    "in_process",
+    "load_world",
+    "parse_robot",
+    "parse_world",
+    "plot_recording",
+    "random_obstacles",
+    "read_recording",
+    "remote",
+    "serve_world",
+]
