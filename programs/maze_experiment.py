@@ -28,7 +28,14 @@ import msgpack
 import numpy as np
 
 from robots.explore import EXCHANGES, METHODS, ExplorerAgent, make_team
-from sim_hw.grid._maze import FREE, Maze, MazeFileError, MazeWorld, generate_maze, load_maze
+from sim_hw.grid import (
+    Maze,
+    MazeFileError,
+    MazeWorld,
+    generate_maze,
+    load_maze,
+    observable,
+)
 
 AGENT_COUNTS = (1, 2, 4, 6, 8, 10, 15, 20)
 PROBABILITIES = (0.85, 0.15)
@@ -45,28 +52,6 @@ EXTRA = (
     ("comm_paper_kB", "communication, paper eq. 8 (kB)"),
     ("step_ms", "computation per agent step (ms)"),
 )
-
-
-def observable(grid: np.ndarray, starts: list[tuple[int, int]], reach: int = 2) -> np.ndarray:
-    """Inner cells the star sensor can see from some free cell reachable from a start."""
-    from sim_hw.grid._maze import visible_cells
-
-    _rows, _cols = grid.shape
-    seen = np.zeros(grid.shape, dtype=bool)
-    reached = np.zeros(grid.shape, dtype=bool)
-    todo = [s for s in starts]
-    for s in todo:
-        reached[s] = True
-    while todo:
-        r, c = todo.pop()
-        for rr, cc, _ in visible_cells(grid, (r, c), reach):
-            seen[rr, cc] = True
-        for nr, nc in ((r - 1, c), (r + 1, c), (r, c - 1), (r, c + 1)):
-            if grid[nr, nc] == FREE and not reached[nr, nc]:
-                reached[nr, nc] = True
-                todo.append((nr, nc))
-    seen[0, :] = seen[-1, :] = seen[:, 0] = seen[:, -1] = False
-    return seen
 
 
 def run_trial(

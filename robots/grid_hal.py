@@ -29,6 +29,7 @@ __all__ = [
     "OBSTACLE",
     "OCCUPIED",
     "OFFSETS",
+    "STAR_RAYS",
     "GridDrive",
     "GridFloor",
     "GridGripper",
@@ -56,6 +57,18 @@ OFFSETS: tuple[tuple[int, int], ...] = (
     (1, 1),
     (1, -1),
     (-1, -1),
+)
+
+#: The 8 rays of the star view (Linardakis et al., section III-A): 4 straight, then 4 diagonal.
+STAR_RAYS: tuple[tuple[int, int], ...] = (
+    (-1, 0),
+    (1, 0),
+    (0, -1),
+    (0, 1),
+    (-1, -1),
+    (-1, 1),
+    (1, -1),
+    (1, 1),
 )
 
 

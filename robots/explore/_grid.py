@@ -11,9 +11,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from robots.grid_hal import FREE as FREE
+from robots.grid_hal import OBSTACLE as OBSTACLE
+
 UNKNOWN = -1
-FREE = 0
-OBSTACLE = 1
 AGENT = 2
 
 

@@ -8,18 +8,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._grid import OBSTACLE, UNKNOWN
+from robots.grid_hal import OBSTACLE
+from robots.grid_hal import STAR_RAYS as RAYS
 
-RAYS: tuple[tuple[int, int], ...] = (
-    (-1, 0),
-    (1, 0),
-    (0, -1),
-    (0, 1),
-    (-1, -1),
-    (-1, 1),
-    (1, -1),
-    (1, 1),
-)
+from ._grid import UNKNOWN
 
 
 def unexplored_in_view(known: np.ndarray, reach: int = 2) -> np.ndarray:

@@ -12,6 +12,8 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
+from robots.grid_hal import OFFSETS as ALL_OFFSETS
+
 #: Value of a floor cell that no agent has marked yet (the paper's "cell without a value").
 UNMARKED = -1
 #: The default colour of a floor cell (no trail).
@@ -21,8 +23,8 @@ TRAIL = 1
 
 #: Move directions, in the order a world lists neighbours: north, east, south, west.
 NORTH, EAST, SOUTH, WEST = 0, 1, 2, 3
-#: (row, column) offset of each direction.
-OFFSETS = ((-1, 0), (0, 1), (1, 0), (0, -1))
+#: (row, column) offset of each direction (the first four of the grid HAL's).
+OFFSETS = ALL_OFFSETS[:4]
 
 
 def opposite(direction: int) -> int:

@@ -2,7 +2,9 @@
 
 Free/obstacle cells with 4-neighbour moves (agents may share a cell), a digital floor of integer
 values and colours, resources with quantities, a base, an optional pheromone layer, view rays
-blocked by obstacles and range queries; grid files (text or JSON) and seeded generators.
+blocked by obstacles and range queries; grid files (text or JSON) and seeded generators; the
+Linardakis maze (generator, files, the star view); the lock-step :class:`GridServer` over a
+grid world and its robot-side backend (:func:`in_process`, :func:`connect`).
 
 Example::
 
@@ -14,9 +16,23 @@ Example::
 from sim_hw.grid._errors import GridFileError
 from sim_hw.grid._generate import double_corridor, maze, place_resources, random_obstacles
 from sim_hw.grid._grid import OFFSETS4, OFFSETS8, Cell, Grid
+from sim_hw.grid._hardware import GridRobot, connect, in_process
 from sim_hw.grid._io import Layout, load_grid, load_layout, parse_json, parse_text
+from sim_hw.grid._maze import (
+    Maze,
+    MazeFileError,
+    MazeWorld,
+    broadcast_range,
+    generate_maze,
+    load_maze,
+    observable,
+    random_starts,
+    save_maze,
+    star_view,
+)
 from sim_hw.grid._pheromone import PheromoneField
-from sim_hw.grid._sensing import line_of_sight, ray_cells, visible_cells, within_range
+from sim_hw.grid._sensing import disc_view, line_of_sight, ray_cells, within_range
+from sim_hw.grid._server import GridServer, RobotDropped, serve_grid
 from sim_hw.grid._world import Behaviour, GridWorld
 
 __all__ = [
@@ -26,19 +42,35 @@ __all__ = [
     "Cell",
     "Grid",
     "GridFileError",
+    "GridRobot",
+    "GridServer",
     "GridWorld",
     "Layout",
+    "Maze",
+    "MazeFileError",
+    "MazeWorld",
     "PheromoneField",
+    "RobotDropped",
+    "broadcast_range",
+    "connect",
+    "disc_view",
     "double_corridor",
+    "generate_maze",
+    "in_process",
     "line_of_sight",
     "load_grid",
     "load_layout",
+    "load_maze",
     "maze",
+    "observable",
     "parse_json",
     "parse_text",
     "place_resources",
     "random_obstacles",
+    "random_starts",
     "ray_cells",
-    "visible_cells",
+    "save_maze",
+    "serve_grid",
+    "star_view",
     "within_range",
 ]

@@ -11,12 +11,14 @@ from typing import Any
 
 import numpy as np
 
+from robots.grid_hal import OFFSETS
+
 Cell = tuple[int, int]
 
 #: (row, column) offsets of the 4 neighbours, in the order north, east, south, west.
-OFFSETS4: tuple[Cell, ...] = ((-1, 0), (0, 1), (1, 0), (0, -1))
-#: The 8-neighbourhood (4 sides then 4 diagonals).
-OFFSETS8: tuple[Cell, ...] = (*OFFSETS4, (-1, 1), (1, 1), (1, -1), (-1, -1))
+OFFSETS4: tuple[Cell, ...] = OFFSETS[:4]
+#: The 8-neighbourhood (4 sides then 4 diagonals), as the grid HAL numbers directions.
+OFFSETS8: tuple[Cell, ...] = OFFSETS
 
 
 class Grid:

@@ -17,25 +17,15 @@ side: the ground truth, the range-2 star sensor (section III-A) and the moves a 
 from __future__ import annotations
 
 import json
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-FREE = 0
-OBSTACLE = 1
+from robots.grid_hal import FREE, OBSTACLE
+from robots.grid_hal import STAR_RAYS as RAYS
 
-#: The 8 rays of the star sensor: 4 straight, 4 diagonal (section III-A).
-RAYS: tuple[tuple[int, int], ...] = (
-    (-1, 0),
-    (1, 0),
-    (0, -1),
-    (0, 1),
-    (-1, -1),
-    (-1, 1),
-    (1, -1),
-    (1, 1),
-)
 #: 4-connected moves an agent may make, plus staying put.
 MOVES: tuple[tuple[int, int], ...] = ((0, 0), (-1, 0), (1, 0), (0, -1), (0, 1))
 
@@ -130,9 +120,7 @@ def random_starts(grid: np.ndarray, n: int, rng: np.random.Generator) -> list[tu
     return [(int(free[k][0]), int(free[k][1])) for k in pick]
 
 
-def visible_cells(
-    grid: np.ndarray, pos: tuple[int, int], reach: int = 2
-) -> list[tuple[int, int, int]]:
+def star_view(grid: np.ndarray, pos: tuple[int, int], reach: int = 2) -> list[tuple[int, int, int]]:
     """What the star sensor sees from ``pos``: ``(row, col, value)`` triples.
 
     Section III-A: 8 rays (4 straight, 4 diagonal) up to ``reach`` cells; a ray stops at the
@@ -150,6 +138,31 @@ def visible_cells(
             seen.append((r, c, v))
             if v == OBSTACLE:
                 break
+    return seen
+
+
+def observable(grid: np.ndarray, starts: Iterable[tuple[int, int]], reach: int = 2) -> np.ndarray:
+    """Inner cells a star view of ``reach`` sees from some free cell reachable from a start.
+
+    The observer's measure of a complete exploration (the border never counts).
+    """
+    rows, cols = grid.shape
+    seen = np.zeros(grid.shape, dtype=bool)
+    if reach <= 0:
+        return seen
+    reached = np.zeros(grid.shape, dtype=bool)
+    todo = list(starts)
+    for s in todo:
+        reached[s] = True
+    while todo:
+        r, c = todo.pop()
+        for rr, cc, _ in star_view(grid, (r, c), reach):
+            seen[rr, cc] = True
+        for nr, nc in ((r - 1, c), (r + 1, c), (r, c - 1), (r, c + 1)):
+            if 0 <= nr < rows and 0 <= nc < cols and grid[nr, nc] == FREE and not reached[nr, nc]:
+                reached[nr, nc] = True
+                todo.append((nr, nc))
+    seen[0, :] = seen[-1, :] = seen[:, 0] = seen[:, -1] = False
     return seen
 
 
@@ -180,7 +193,7 @@ class MazeWorld:
 
     def sense(self, i: int, reach: int = 2) -> list[tuple[int, int, int]]:
         """The star sensor of agent ``i``."""
-        return visible_cells(self.grid, self.positions[i], reach)
+        return star_view(self.grid, self.positions[i], reach)
 
     def move(self, i: int, step: tuple[int, int]) -> bool:
         """Move agent ``i`` one cell (4-connected) unless into an obstacle or occupied cell."""

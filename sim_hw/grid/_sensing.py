@@ -34,7 +34,7 @@ def line_of_sight(grid: Grid, a: Cell, b: Cell) -> bool:
     return all(cell in (a, b) or grid.is_free(cell) for cell in ray_cells(a, b))
 
 
-def visible_cells(grid: Grid, origin: Cell, radius: float) -> list[Cell]:
+def disc_view(grid: Grid, origin: Cell, radius: float) -> list[Cell]:
     """Cells within ``radius`` cells of ``origin`` that a ray from ``origin`` reaches.
 
     An obstacle cell is visible (it is what the ray hits) but hides what lies behind it.

@@ -38,8 +38,9 @@ from typing import Any
 import numpy as np
 
 from robots.grid_hal import FREE, OBSTACLE, OCCUPIED, OFFSETS
-from sim_hw.grid import Cell, GridWorld
-from sim_hw.grid._maze import visible_cells
+from sim_hw.grid._grid import Cell
+from sim_hw.grid._maze import observable, star_view
+from sim_hw.grid._world import GridWorld
 
 log = logging.getLogger("sim_hw.grid._server")
 
@@ -349,7 +350,7 @@ class GridServer:
                 future.set_exception(exc)
                 continue
             self.robots[name] = bot
-            self._target |= self._observable(bot.start, bot.view)
+            self._target |= observable(self.cells, [self.grid.cell(bot.start)], bot.view)
             admitted.append((name, future))
         return admitted
 
@@ -460,7 +461,7 @@ class GridServer:
             )
         rays = []
         if bot.view > 0:
-            for rr, cc, v in visible_cells(self.cells, (r, col), bot.view):
+            for rr, cc, v in star_view(self.cells, (r, col), bot.view):
                 rays.append([rr - r, cc - col, v])
                 self._seen[rr, cc] = True
         br, bc = grid.cell(w.base)
@@ -500,19 +501,6 @@ class GridServer:
             if d <= self.radio:
                 out.append(other)
         return out
-
-    def _observable(self, start: int, reach: int) -> np.ndarray:
-        """Inner cells a view sensor of ``reach`` sees from some free cell reachable from
-        ``start`` (the observer's measure of a complete exploration)."""
-        seen = np.zeros(self.cells.shape, dtype=bool)
-        if reach <= 0:
-            return seen
-        reached = self.grid.reachable(self.grid.cell(start))
-        for r, c in zip(*np.nonzero(reached), strict=True):
-            for rr, cc, _ in visible_cells(self.cells, (int(r), int(c)), reach):
-                seen[rr, cc] = True
-        seen[0, :] = seen[-1, :] = seen[:, 0] = seen[:, -1] = False
-        return seen
 
     # -- snapshots ----------------------------------------------------------------------------
 

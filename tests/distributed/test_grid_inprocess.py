@@ -15,10 +15,15 @@ from programs.explore_maze import explore_maze
 from programs.foraging import foraging
 from programs.maze_experiment import run_trial
 from robots.grid_hal import FREE, OBSTACLE, OCCUPIED
-from sim_hw.grid import Grid, GridWorld
-from sim_hw.grid._hardware import in_process
-from sim_hw.grid._maze import generate_maze, save_maze
-from sim_hw.grid._server import GridServer, RobotDropped
+from sim_hw.grid import (
+    Grid,
+    GridServer,
+    GridWorld,
+    RobotDropped,
+    generate_maze,
+    in_process,
+    save_maze,
+)
 from sim_hw.grid.cli import build_server
 
 EAST, WEST = 1, 3

@@ -68,7 +68,7 @@ async def test_a_hung_robot_process_is_dropped_within_seconds(tmp_path: Path) ->
 async def test_maze_survivors_finish_without_a_killed_member(tmp_path: Path) -> None:
     import numpy as np
 
-    from sim_hw.grid._maze import generate_maze, save_maze
+    from sim_hw.grid import generate_maze, save_maze
 
     maze = generate_maze(20, 0.85, np.random.default_rng(3), n_starts=4)
     save_maze(tmp_path / "maze.json", maze)

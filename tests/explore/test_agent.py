@@ -15,7 +15,7 @@ from robots.explore import (
     unexplored_in_view,
     voronoi_partition,
 )
-from sim_hw.grid._maze import generate_maze, visible_cells
+from sim_hw.grid import generate_maze, star_view
 
 
 def test_voronoi_regions_cover_free_cells_without_overlap() -> None:
@@ -48,7 +48,7 @@ def test_messages_carry_only_changes_and_merge() -> None:
     grid[1:-1, 1:-1] = 0
     starts = [(2, 2), (6, 6)]
     a, b = make_team("cu-lvp", grid.shape, starts, 3)
-    seen_a = visible_cells(grid, (2, 2))
+    seen_a = star_view(grid, (2, 2))
     inner_a = {(r, c) for r, c, _ in seen_a if 0 < r < 8 and 0 < c < 8}
     a.observe(seen_cells=seen_a, position=(2, 2))
     first = msgpack.unpackb(msgpack.packb(a.outgoing_message()))
@@ -63,7 +63,7 @@ def test_messages_carry_only_changes_and_merge() -> None:
     assert b.merged == frozenset({0})  # the region of the agent met is merged in
     assert b.peers[0].pos == a.pos
     # b heard a newcomer: its next message is its whole map, so a catches up
-    seen_b = visible_cells(grid, (6, 6))
+    seen_b = star_view(grid, (6, 6))
     inner_b = {(r, c) for r, c, _ in seen_b if 0 < r < 8 and 0 < c < 8}
     b.observe(seen_cells=seen_b, position=(6, 6))
     full = b.outgoing_message()
@@ -87,7 +87,7 @@ def test_agent_never_plans_into_a_known_obstacle() -> None:
     grid[3, 2:5] = 1
     agent = ExplorerAgent(0, grid.shape, [(2, 3)], make_policy("nf"), np.random.default_rng(0))
     for _ in range(30):
-        agent.observe(seen_cells=visible_cells(grid, agent.position), heard_messages=[])
+        agent.observe(seen_cells=star_view(grid, agent.position), heard_messages=[])
         dr, dc = agent.decide()
         r, c = agent.position
         assert grid[r + dr, c + dc] == 0
@@ -96,7 +96,7 @@ def test_agent_never_plans_into_a_known_obstacle() -> None:
 
 
 def test_cu_lvp_goals_stay_inside_the_agents_regions() -> None:
-    from sim_hw.grid._maze import MazeWorld
+    from sim_hw.grid import MazeWorld
 
     maze = generate_maze(30, 0.85, np.random.default_rng(11), n_starts=6)
     world = MazeWorld(maze, 6)
@@ -166,7 +166,7 @@ def _chain(exchanges: int) -> list[ExplorerAgent]:
     team = make_team("cu-lvp", grid.shape, starts, 1)
     hears = {0: [1], 1: [0, 2], 2: [1]}  # range 7 cells
     for a in team:
-        a.observe(seen_cells=visible_cells(grid, a.position), position=a.position)
+        a.observe(seen_cells=star_view(grid, a.position), position=a.position)
     msgs = [msgpack.unpackb(msgpack.packb(a.outgoing_message())) for a in team]
     for i, a in enumerate(team):
         a.observe(heard_messages=[msgs[j] for j in hears[i]])
@@ -195,8 +195,8 @@ def test_agents_sharing_a_region_split_it() -> None:
 
     def shared(holder_at: int) -> tuple[list[int], list[int]]:
         helper, holder = make_team("cu-lvp", grid.shape, starts, 1)
-        helper.observe(seen_cells=visible_cells(grid, (1, 8)), position=(1, 8))
-        holder.observe(seen_cells=visible_cells(grid, (1, holder_at)), position=(1, holder_at))
+        helper.observe(seen_cells=star_view(grid, (1, 8)), position=(1, 8))
+        holder.observe(seen_cells=star_view(grid, (1, holder_at)), position=(1, holder_at))
         helper.set_regions({1})  # its own region done, it helps with the holder's
         messages = [msgpack.unpackb(msgpack.packb(a.outgoing_message())) for a in (helper, holder)]
         helper.observe(heard_messages=messages[1:])

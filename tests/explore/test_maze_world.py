@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 
-from sim_hw.grid._maze import (
+from sim_hw.grid import (
     Maze,
     MazeFileError,
     MazeWorld,
@@ -15,7 +15,7 @@ from sim_hw.grid._maze import (
     generate_maze,
     load_maze,
     save_maze,
-    visible_cells,
+    star_view,
 )
 
 
@@ -68,7 +68,7 @@ def test_star_sensor_sees_eight_rays_blocked_by_obstacles() -> None:
             [1, 1, 1, 1, 1, 1, 1],
         ]
     )
-    seen = {(r, c): v for r, c, v in visible_cells(grid, (3, 3), reach=2)}
+    seen = {(r, c): v for r, c, v in star_view(grid, (3, 3), reach=2)}
     expected = {
         (3, 3): 0,
         (2, 3): 0,
@@ -92,7 +92,7 @@ def test_star_sensor_sees_eight_rays_blocked_by_obstacles() -> None:
 def test_star_sensor_stops_at_the_border() -> None:
     grid = np.ones((5, 5), dtype=np.int8)
     grid[1:4, 1:4] = 0
-    cells = {(r, c) for r, c, _ in visible_cells(grid, (1, 1), reach=2)}
+    cells = {(r, c) for r, c, _ in star_view(grid, (1, 1), reach=2)}
     assert (0, 1) in cells
     assert (0, 0) in cells
     assert (1, 0) in cells

@@ -10,7 +10,7 @@ import pytest
 
 from programs.maze_experiment import register, run_trial
 from robots.explore import METHODS
-from sim_hw.grid._maze import generate_maze, save_maze
+from sim_hw.grid import generate_maze, save_maze
 
 
 @pytest.mark.parametrize("method", list(METHODS))

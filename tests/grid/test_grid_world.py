@@ -12,13 +12,13 @@ from sim_hw.grid import (
     Grid,
     GridWorld,
     PheromoneField,
+    disc_view,
     double_corridor,
     line_of_sight,
     maze,
     parse_text,
     place_resources,
     random_obstacles,
-    visible_cells,
     within_range,
 )
 
@@ -134,7 +134,7 @@ def test_view_rays_and_range() -> None:
     g = parse_text(".....\n..#..\n.....\n").grid
     assert not line_of_sight(g, (1, 0), (1, 4))
     assert line_of_sight(g, (0, 0), (0, 4))
-    seen = visible_cells(g, (1, 0), 4)
+    seen = disc_view(g, (1, 0), 4)
     assert (1, 2) in seen and (1, 3) not in seen
     assert within_range([(0, 0), (0, 3), (2, 0)], 0, 2.0) == [2]
     assert within_range([(0, 0), (0, 3), (2, 0)], 0, 1.5, cell_size=0.5) == [1, 2]
