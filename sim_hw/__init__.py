@@ -8,6 +8,7 @@
 The continuous wing's public face is re-exported here, since it is the default world.
 """
 
+from sim_hw._process import STATE_TOPIC
 from sim_hw.continuous import (
     DT,
     STEPS_PER_TICK,
@@ -40,6 +41,7 @@ from sim_hw.continuous import (
 )
 
 __all__ = [
+    "STATE_TOPIC",
     "DT",
     "STEPS_PER_TICK",
     "TICK",
