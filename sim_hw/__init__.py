@@ -41,8 +41,8 @@ from sim_hw.continuous import (
 )
 
 __all__ = [
-    "STATE_TOPIC",
     "DT",
+    "STATE_TOPIC",
     "STEPS_PER_TICK",
     "TICK",
     "BoxSpec",

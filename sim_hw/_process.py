@@ -9,9 +9,10 @@ from __future__ import annotations
 
 import asyncio
 import logging
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from sim_hw.continuous._server import WorldServer
+if TYPE_CHECKING:
+    from sim_hw.continuous._server import WorldServer
 
 log = logging.getLogger("sim_hw.process")
 
