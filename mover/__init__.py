@@ -3,7 +3,9 @@
 The public face of the middleware: a :class:`Node` per process (RPC, range-limited broadcasts,
 liveliness and team membership over Eclipse Zenoh), the :class:`Team` and its key, the
 collectives (:class:`TaskTeam` with ``distributed_or`` / ``distributed_and``), programs
-(:class:`ProgramHost`, :func:`launch`) and the errors. Everything else lives in private modules.
+(:class:`ProgramHost`, :func:`launch`, and ``PROGRESS_TOPIC``, the topic under which members
+report a run's progress: ``f"{PROGRESS_TOPIC}/{run}"``) and the errors. Everything else lives in
+private modules; the command-line helpers shared by every process are in :mod:`mover.cli`.
 """
 
 from ._config import NodeConfig, Team, free_port
@@ -24,13 +26,14 @@ from ._exceptions import (
 )
 from ._membership import MemberEvent, MemberInfo, Membership
 from ._node import Node
-from ._programs import ProgramHost, RunTeam, launch
+from ._programs import PROGRESS_TOPIC, ProgramHost, RunTeam, launch
 from ._radio import FixedLocator, Locator, Message, Neighbour, RadioModel, Subscription
 from ._rpc import procedure
 from ._tasks import Collectives, OperationFailed, Outcome, StepMetrics, TaskTeam
 from ._wire import pack, unpack
 
 __all__ = [
+    "PROGRESS_TOPIC",
     "BadArguments",
     "CallError",
     "CallTimeout",

@@ -3,7 +3,10 @@
 Verbs are gathered from the ``mover.commands`` entry-point group, as the ``ros2`` command gathers
 its verbs, so that this package imports none of the packages that provide them. Each entry point
 is a ``register(subparsers)`` function that adds one sub-parser and sets ``func`` — a callable
-taking the parsed arguments and returning an exit code.
+taking the parsed arguments and returning an exit code. ``python -m mover`` is the same command.
+
+The helpers verbs share (team and logging options, :class:`UsageError`) are public, in
+:mod:`mover.cli`.
 """
 
 from __future__ import annotations
@@ -14,11 +17,11 @@ import sys
 from collections.abc import Sequence
 from importlib.metadata import entry_points
 
+from .cli import UsageError, add_log_arguments, setup_logging
+
+__all__ = ["UsageError", "build_parser", "main"]  # UsageError: its old home, kept for imports
+
 log = logging.getLogger("mover.cli")
-
-
-class UsageError(Exception):
-    """A command-line mistake: printed as one line, exit code 2."""
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -26,7 +29,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="mover", description="Program a team of mobile robots as one distributed program."
     )
-    parser.add_argument("-v", "--verbose", action="count", default=0, help="more log lines")
+    add_log_arguments(parser)
     sub = parser.add_subparsers(dest="verb", metavar="VERB", required=True)
     for ep in sorted(entry_points(group="mover.commands"), key=lambda e: e.name):
         try:
@@ -40,9 +43,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``mover`` console script."""
     parser = build_parser()
     args = parser.parse_args(argv)
-    level = logging.WARNING - 10 * min(args.verbose, 2)
-    logging.basicConfig(level=level, format="%(asctime)s %(name)s %(levelname)s %(message)s")
     try:
+        setup_logging(args)
         code = args.func(args)
     except UsageError as exc:
         print(f"mover {args.verb}: {exc}", file=sys.stderr)

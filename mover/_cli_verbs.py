@@ -1,7 +1,7 @@
 """The `mover ps`, `mover call` and `mover keygen` verbs.
 
 Team and transport come from ``--team`` and the MOVER_* environment (see ``mover._config``);
-``--connect`` adds endpoints to reach the team.
+``--connect`` adds endpoints to reach the team. Both are :func:`mover.cli.add_team_arguments`'.
 """
 
 from __future__ import annotations
@@ -13,27 +13,17 @@ import secrets
 import sys
 from typing import TYPE_CHECKING, Any
 
-from ._cli import UsageError
 from ._config import NodeConfig, Team
 from ._exceptions import CallError
 from ._keys import check_name
+from .cli import UsageError, add_team_arguments, team_from_args
 
 if TYPE_CHECKING:
     Sub = argparse._SubParsersAction[argparse.ArgumentParser]
 
 
 def _team_options(p: argparse.ArgumentParser) -> None:
-    p.add_argument(
-        "--team",
-        help="team name (default: $MOVER_TEAM); the key comes from "
-        "$MOVER_TEAM_KEY or $MOVER_TEAM_KEY_FILE",
-    )
-    p.add_argument(
-        "--connect",
-        action="append",
-        metavar="ENDPOINT",
-        help="zenoh endpoint of a team member or router; repeatable",
-    )
+    add_team_arguments(p)
     p.add_argument(
         "--wait",
         type=float,
@@ -41,13 +31,6 @@ def _team_options(p: argparse.ArgumentParser) -> None:
         metavar="S",
         help="seconds to wait for the team to be discovered (default 2)",
     )
-
-
-def _open(args: argparse.Namespace) -> tuple[Team, NodeConfig]:
-    try:
-        return Team.from_env(args.team), NodeConfig.from_env(args.connect or ())
-    except ValueError as exc:
-        raise UsageError(str(exc)) from None
 
 
 # -- ps -------------------------------------------------------------------------------------------
@@ -62,7 +45,7 @@ def register_ps(sub: Sub) -> None:
 
 
 def run_ps(args: argparse.Namespace) -> int:
-    team, config = _open(args)
+    team, config = team_from_args(args)
     return asyncio.run(_ps(team, config, args))
 
 
@@ -132,7 +115,7 @@ def run_call(args: argparse.Namespace) -> int:
     kwargs = _json(args.kwargs, "--kwargs") if args.kwargs else {}
     if not isinstance(kwargs, dict):
         raise UsageError("--kwargs must be a JSON object")
-    team, config = _open(args)
+    team, config = team_from_args(args)
     return asyncio.run(_call(team, config, args, positional, kwargs))
 
 
@@ -252,7 +235,7 @@ def run_run(args: argparse.Namespace) -> int:
         )
     except ValueError as exc:
         raise UsageError(str(exc)) from None
-    team, config = _open(args)
+    team, config = team_from_args(args)
     return asyncio.run(_run(team, config, args, robots, kwargs))
 
 

@@ -31,6 +31,8 @@ if TYPE_CHECKING:
 
 log = logging.getLogger("mover.programs")
 
+#: Where members report a run's progress: ``f"{PROGRESS_TOPIC}/{run}"`` carries each
+#: :meth:`RunTeam.report` as ``{"member": ..., "phase": ..., **info}``; subscribe to it to watch.
 PROGRESS_TOPIC = "mover/run"
 
 

@@ -68,7 +68,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ._cli import UsageError
+    from .cli import UsageError
 
     if args.gen_config:
         if not args.team or not args.members:

@@ -22,8 +22,7 @@ import tomllib
 from pathlib import Path
 from typing import Any
 
-from mover import Node, NodeConfig, Team, free_port, launch
-from mover._programs import PROGRESS_TOPIC
+from mover import PROGRESS_TOPIC, Node, NodeConfig, Team, free_port, launch
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_WORLD = ROOT / "worlds" / "search_and_rescue.toml"
@@ -47,7 +46,7 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from mover._cli import UsageError
+    from mover.cli import UsageError
 
     world = Path(args.world)
     try:

@@ -13,7 +13,7 @@ import logging
 from pathlib import Path
 from typing import Any
 
-from mover._cli import UsageError
+from mover.cli import UsageError
 
 log = logging.getLogger("sim_hw.continuous.cli")
 

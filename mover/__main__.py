@@ -1,0 +1,8 @@
+"""``python -m mover``: the ``mover`` command."""
+
+import sys
+
+from mover._cli import main
+
+if __name__ == "__main__":
+    sys.exit(main())

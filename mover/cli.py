@@ -1,0 +1,125 @@
+"""The public toolkit of mover's command lines: what every process's CLI shares.
+
+The verbs of ``mover`` and the robot process (``python -m robots``) take the same team options,
+and every process the same logging options; defining them here once keeps their spelling and
+meaning the same everywhere (they were written twice before, and the log level was set two
+ways). Nothing here opens a session or reads the environment until it is called:
+
+* :func:`add_team_arguments` — ``--team NAME`` (default ``$MOVER_TEAM``; the key comes from
+  ``$MOVER_TEAM_KEY`` or ``$MOVER_TEAM_KEY_FILE``) and ``--connect ENDPOINT`` (repeatable), and
+  :func:`team_from_args` to turn them into a :class:`~mover.Team` and a
+  :class:`~mover.NodeConfig`;
+* :func:`add_log_arguments` and :func:`setup_logging` — ``-v/--verbose`` (``-v`` INFO, ``-vv``
+  DEBUG) and ``--log-level LEVEL``; with neither, ``$MOVER_LOG_LEVEL`` (``LOG_LEVEL_ENV``),
+  else the process's default;
+* :class:`UsageError` — a command-line mistake, which a command prints as one line and exits 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import os
+
+from ._config import NodeConfig, Team
+
+__all__ = [
+    "LOG_LEVEL_ENV",
+    "UsageError",
+    "add_log_arguments",
+    "add_team_arguments",
+    "setup_logging",
+    "team_from_args",
+]
+
+#: The environment variable that sets the log level of a process given no logging option.
+LOG_LEVEL_ENV = "MOVER_LOG_LEVEL"
+
+_LEVELS = ("DEBUG", "INFO", "WARNING", "ERROR", "CRITICAL")
+_FORMAT = "%(asctime)s %(name)s %(levelname)s %(message)s"
+
+
+class UsageError(Exception):
+    """A command-line mistake: printed as one line, exit code 2."""
+
+
+def add_team_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add ``--team NAME`` and ``--connect ENDPOINT`` (repeatable) to ``parser``.
+
+    Both are None when not given: :func:`team_from_args` then reads ``$MOVER_TEAM`` and
+    ``$MOVER_CONNECT`` (see :meth:`mover.Team.from_env`, :meth:`mover.NodeConfig.from_env`).
+    """
+    parser.add_argument(
+        "--team",
+        help="team name (default: $MOVER_TEAM); the key comes from "
+        "$MOVER_TEAM_KEY or $MOVER_TEAM_KEY_FILE",
+    )
+    parser.add_argument(
+        "--connect",
+        action="append",
+        metavar="ENDPOINT",
+        help="zenoh endpoint of a team member or router; repeatable",
+    )
+
+
+def team_from_args(args: argparse.Namespace) -> tuple[Team, NodeConfig]:
+    """The team and node settings of :func:`add_team_arguments`' options and the environment.
+
+    Raises :class:`UsageError` (one line) when the team, its key or an endpoint is wrong.
+    """
+    try:
+        return Team.from_env(args.team), NodeConfig.from_env(args.connect or ())
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+
+
+def _level(text: str) -> str:
+    name = text.strip().upper()
+    if name not in _LEVELS:
+        raise ValueError(f"unknown log level {text!r} (one of {', '.join(_LEVELS)})")
+    return name
+
+
+def _level_argument(text: str) -> str:
+    try:
+        return _level(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def add_log_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add ``-v/--verbose`` (counted) and ``--log-level LEVEL`` to ``parser``."""
+    parser.add_argument(
+        "-v",
+        "--verbose",
+        action="count",
+        default=0,
+        help=f"more log lines: -v INFO, -vv DEBUG (default: ${LOG_LEVEL_ENV})",
+    )
+    parser.add_argument(
+        "--log-level",
+        type=_level_argument,
+        metavar="LEVEL",
+        help=f"{', '.join(_LEVELS)} (default: ${LOG_LEVEL_ENV}); wins over -v",
+    )
+
+
+def setup_logging(args: argparse.Namespace, *, default: str = "WARNING") -> int:
+    """Configure the root logger from :func:`add_log_arguments`' options; return the level.
+
+    ``--log-level`` wins, then ``-v`` (INFO) or ``-vv`` (DEBUG), then ``$MOVER_LOG_LEVEL``,
+    then ``default``. Raises :class:`UsageError` when ``$MOVER_LOG_LEVEL`` names no level. As
+    :func:`logging.basicConfig`, it leaves a root logger that already has handlers alone.
+    """
+    if args.log_level:
+        name = str(args.log_level)
+    elif args.verbose:
+        name = "INFO" if args.verbose == 1 else "DEBUG"
+    else:
+        try:
+            name = _level(os.environ.get(LOG_LEVEL_ENV) or default)
+        except ValueError as exc:
+            raise UsageError(f"${LOG_LEVEL_ENV}: {exc}") from None
+    level: int = getattr(logging, name)
+    logging.basicConfig(level=level, format=_FORMAT)
+    return level
