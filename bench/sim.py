@@ -26,7 +26,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from sim_hw import World, WorldServer, WorldSpec, in_process  # noqa: E402
+from sim_hw import World, WorldServer, WorldSpec, in_process, serve_world  # noqa: E402
 
 ROBOT = {"sonar": {"rays": 8, "max_range": 3.0}, "camera": False}
 
@@ -78,7 +78,6 @@ async def world_alone(n: int, seconds: float) -> float:
 async def processes(n: int, seconds: float) -> float:
     """Real-time factor of n walker processes on the remote HAL."""
     from mover import Node, NodeConfig, Team, free_port
-    from sim_hw._process import serve_world
 
     team, port = Team.generate("bench"), free_port()
     timer = _Timer()

@@ -1,73 +1,72 @@
-"""The world process: a :class:`WorldServer` exported over a mover node.
+"""The world process of both worlds: a lock-step door exported over a mover node.
 
-Robots call ``join(robot, spec)``, ``step(robot, tick, command)`` (one call per tick; in
-lock-step the reply comes once every robot's command for the tick is in and the world has
-stepped) and ``leave(robot)``. Snapshots go out on the team-wide topic ``world/state``.
+Robots call ``join(robot, spec)``, ``step(robot, tick, command)`` (in lock-step the reply comes
+once every robot's command for the tick is in and the world has stepped) and ``leave(robot)``.
+A robot whose process leaves the team is dropped (``team.on_gone``: only once it has stayed
+gone for a second, so a flapping link keeps its body); the door's own timeout still catches
+one that hangs. :func:`run_world_process` is the one main of ``mover world`` and ``mover
+gridworld``.
 """
 
 from __future__ import annotations
 
 import asyncio
 import logging
-from typing import TYPE_CHECKING, Any
+from collections.abc import Callable
+from typing import Any
 
-if TYPE_CHECKING:
-    from sim_hw.continuous._server import WorldServer
+from sim_hw._lockstep import LockstepDoor
 
 log = logging.getLogger("sim_hw.process")
 
 STATE_TOPIC = "world/state"
+"""The team-wide topic on which a world process streams its snapshots."""
 
 
-def serve_world(node: Any, server: WorldServer, *, state_topic: str = STATE_TOPIC) -> None:
-    """Export ``server``'s three calls on ``node`` and send its snapshots to ``state_topic``."""
+def serve(node: Any, door: LockstepDoor[Any]) -> None:
+    """Export ``door``'s three calls on ``node`` and drop the robots whose process left."""
 
     async def join(robot: str, spec: dict[str, Any]) -> dict[str, Any]:
-        return await server.join(robot, spec or None)
+        return await door.join(robot, spec or None)
 
     async def step(robot: str, tick: int, command: dict[str, Any]) -> dict[str, Any]:
-        return await server.step(robot, tick, command)
+        return await door.step(robot, tick, command)
 
     async def leave(robot: str) -> None:
-        await server.leave(robot)
+        await door.leave(robot)
 
-    node.export(join, name="join")
-    node.export(step, name="step")
-    node.export(leave, name="leave")
-    # a robot process that dies is seen leaving the team within milliseconds (its liveliness
-    # token goes); the lock-step timeout still catches one that hangs
-    # on_gone: a member whose link flaps (leaves and joins again within a second) keeps its body
-    node.team.on_gone(lambda name: server.drop(name, "left the team"))
-    if server.on_snapshot is None and server.snapshot_every:
-        send = getattr(node, "broadcast_nowait", None) or node.broadcast
-        server.on_snapshot = lambda snap: send(state_topic, snap)
+    for fn in (join, step, leave):
+        node.export(fn, name=fn.__name__)
+    node.team.on_gone(lambda name: door.drop(name, "left the team"))
 
 
 async def run_world_process(
-    server: WorldServer,
+    door: LockstepDoor[Any],
+    export: Callable[[Any, Any], None],
     *,
-    name: str = "world",
-    until: float | None = None,
+    name: str,
+    team: Any,
+    config: Any,
+    until_tick: int | None = None,
     quit_when_empty: bool = False,
-    team: Any = None,
-    config: Any = None,
+    ready: Callable[[], None] | None = None,
 ) -> None:
-    """Open a node named ``name`` (``team`` and ``config`` default to the environment's),
-    serve the world, and run until simulated time ``until``, until every robot has left
-    (``quit_when_empty``), or until cancelled."""
-    from mover import Node, NodeConfig, Team
+    """Open a node named ``name``, ``export(node, door)``, and run until the world reaches
+    tick ``until_tick``, until every robot has left (``quit_when_empty``), or until cancelled."""
+    from mover import Node
 
-    team = team or Team.from_env()
-    config = config or NodeConfig.from_env()
     async with Node(name, team=team, kind="world", config=config) as node:
-        serve_world(node, server)
-        log.info("world %r serving as %r", server.world.spec.name, name)
+        export(node, door)
+        log.info("world serving as %r", name)
+        if ready is not None:
+            ready()
         try:
             seen = False
-            while until is None or server.world.time < until:
+            while until_tick is None or door.stepper.tick < until_tick:
                 await asyncio.sleep(0.05)
-                seen = seen or bool(server.world.robots)
-                if quit_when_empty and seen and not server.world.robots:
+                robots = bool(door.stepper.robots())
+                seen = seen or robots
+                if quit_when_empty and seen and not robots:
                     break
         finally:
-            await server.aclose()
+            await door.aclose()

@@ -12,12 +12,11 @@ Public face (everything else is private and may change):
 * the world process — :func:`serve_world` (exports the world over zenoh).
 """
 
-from sim_hw._process import serve_world
+from sim_hw._lockstep import RobotDropped
 
 from ._generate import double_corridor, random_obstacles
 from ._hardware import SimHardware, in_process, remote
 from ._record import Recorder, plot_recording, read_recording
-from ._server import RobotDropped, WorldServer
 from ._spec import (
     BoxSpec,
     CameraSpec,
@@ -29,6 +28,7 @@ from ._spec import (
     SonarSpec,
     WorldSpec,
 )
+from ._stepper import WorldServer, serve_world
 from ._world import DT, STEPS_PER_TICK, TICK, World
 from ._worldfile import WorldFileError, load_world, parse_robot, parse_world
 

@@ -9,7 +9,7 @@ logged commands reproduces it (PYMUNK-NOTES.md, determinism).
 from __future__ import annotations
 
 import json
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import asdict
 from pathlib import Path
 from typing import IO, Any
@@ -38,9 +38,9 @@ class Recorder:
         self._write(header)
         self._write({"type": "tick", **world.snapshot(), "commands": {}})
 
-    def __call__(self, world: World, commands: dict[str, Command]) -> None:
+    def __call__(self, world: World, commands: Mapping[str, Command]) -> None:
         if world.tick % self.every == 0:
-            self._write({"type": "tick", **world.snapshot(), "commands": commands})
+            self._write({"type": "tick", **world.snapshot(), "commands": dict(commands)})
 
     def _write(self, record: dict[str, Any]) -> None:
         self._file.write(json.dumps(record, separators=(",", ":")) + "\n")

@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import asyncio
 import logging
+import math
 from pathlib import Path
 from typing import Any
 
@@ -81,7 +82,7 @@ def run_world(args: argparse.Namespace) -> int:
     from mover import NodeConfig, Team
     from sim_hw._process import run_world_process
 
-    from . import Recorder, WorldFileError, WorldServer, load_world
+    from . import Recorder, WorldFileError, WorldServer, load_world, serve_world
     from ._world import TICK, World
 
     try:
@@ -115,8 +116,9 @@ def run_world(args: argparse.Namespace) -> int:
         asyncio.run(
             run_world_process(
                 server,
+                serve_world,
                 name=args.name,
-                until=args.until,
+                until_tick=None if args.until is None else math.ceil(round(args.until / TICK, 9)),
                 quit_when_empty=args.quit_when_empty,
                 team=team,
                 config=config,

@@ -13,6 +13,7 @@ Example::
     world.step(behaviours)  # one iteration: every agent perceives, acts, moves
 """
 
+from sim_hw._lockstep import RobotDropped
 from sim_hw.grid._errors import GridFileError
 from sim_hw.grid._generate import double_corridor, maze, place_resources, random_obstacles
 from sim_hw.grid._grid import OFFSETS4, OFFSETS8, Cell, Grid
@@ -31,8 +32,9 @@ from sim_hw.grid._maze import (
     star_view,
 )
 from sim_hw.grid._pheromone import PheromoneField
+from sim_hw.grid._render import render_text
 from sim_hw.grid._sensing import disc_view, line_of_sight, ray_cells, within_range
-from sim_hw.grid._server import GridServer, RobotDropped, serve_grid
+from sim_hw.grid._server import GridServer, GridStepper, serve_grid
 from sim_hw.grid._world import Behaviour, GridWorld
 
 __all__ = [
@@ -44,6 +46,7 @@ __all__ = [
     "GridFileError",
     "GridRobot",
     "GridServer",
+    "GridStepper",
     "GridWorld",
     "Layout",
     "Maze",
@@ -69,6 +72,7 @@ __all__ = [
     "random_obstacles",
     "random_starts",
     "ray_cells",
+    "render_text",
     "save_maze",
     "serve_grid",
     "star_view",

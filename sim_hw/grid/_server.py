@@ -1,23 +1,20 @@
-"""The grid world's clock and its door: lock-step rounds over a :class:`GridWorld`'s layers.
+"""The grid world as the lock-step door drives it, and :class:`GridServer`, the two together.
 
-A :class:`GridServer` owns the floor (values, colours, pheromone), the resources and the base
-of a ``GridWorld``, plus the robots that joined, each on one cell. Robots make three calls:
-``join(robot, spec)``, ``step(robot, round, action)`` and ``leave(robot)``; the world process
-exports them over a mover node (:func:`serve_grid`).
+:class:`GridStepper` owns the floor (values, colours, pheromone), the resources and the base of
+a :class:`GridWorld`, plus the robots that joined, each on one cell; the door
+(``sim_hw._lockstep``) decides when a round happens. Robots make three calls: ``join(robot,
+spec)``, ``step(robot, round, action)`` and ``leave(robot)``.
 
-A round advances only when every robot in the world has handed in its action for it. Actions
-are applied in robot-name order (writes, loading, unloading, pheromone, then the move; a later
-robot sees what an earlier one did this round); then the pheromone diffuses. Every robot's
-perception for the next round is taken after all actions, so each round is a function of the
-previous one and the actions: runs are reproducible. A robot that has not answered ``timeout``
-wall seconds after the first action of a round arrived is dropped, with a log line, and the
-round goes on without it; a robot whose process leaves the team is dropped at once.
+Together (the default), a round's actions are applied in robot-name order (writes, loading,
+unloading, pheromone, then the move; a later robot sees what an earlier one did this round);
+then the pheromone diffuses, and every robot's perception for the next round is taken after all
+actions, so each round is a function of the previous one and the actions.
 
 With ``turns="sequential"`` a round is instead one iteration of Simonin et al.'s section 5.1,
 as ``GridWorld.step`` runs it in process: robots act one at a time in name order, and each
 robot's perception is taken just before its own turn, after the earlier robots' actions of the
-round (so a robot's reply comes once the robot before it has acted in the next round). With the
-same seeds, a foraging run then takes the same iterations as the in-process runner.
+round. With the same seeds, a foraging run then takes the same iterations as the in-process
+runner.
 
 The step reply also says which robots are within radio range (the radio medium knows): robots
 use it to know whose broadcast of this round to wait for. ``until`` names the observer's end
@@ -27,29 +24,25 @@ every cell the robots' view rays can reach from their starts has been seen; ``ne
 
 from __future__ import annotations
 
-import asyncio
 import logging
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from robots.grid_hal import FREE, OBSTACLE, OCCUPIED, OFFSETS
+from sim_hw._lockstep import Command, LockstepDoor, Readings
+from sim_hw._process import serve
 from sim_hw.grid._grid import Cell
 from sim_hw.grid._maze import observable, star_view
+from sim_hw.grid._render import render_text
 from sim_hw.grid._world import GridWorld
 
-log = logging.getLogger("sim_hw.grid._server")
+log = logging.getLogger("sim_hw.grid")
 
 UNTIL = ("exhausted", "delivered", "explored", "never")
-Readings = dict[str, Any]
-
-
-class RobotDropped(LookupError):
-    """The robot is not (or no longer) in the grid world."""
 
 
 @dataclass
@@ -65,16 +58,19 @@ class _Bot:
     moves: int = 0
 
 
-class GridServer:
-    """Runs a grid world in lock-step rounds for the robots that join it.
+class GridStepper:
+    """A :class:`GridWorld`'s layers and the robots on its cells, behind the door.
 
     ``starts`` are placement cells handed to robots without a ``start`` in their spec, in
     name order of admission (then the base). ``exclusive`` forbids two robots on one cell (a
     move into an occupied cell fails, as in the maze papers); otherwise robots share cells
     (Simonin et al.). ``radio`` is the medium's reach in cells, measured with ``metric``
     (``manhattan`` as the maze reference code, or ``euclid``); None: every robot hears every
-    other. ``expect`` robots must join before the first round.
+    other.
     """
+
+    admits_early = False
+    words = ("action", "round")
 
     def __init__(
         self,
@@ -85,13 +81,8 @@ class GridServer:
         radio: float | None = None,
         metric: str = "euclid",
         until: str = "exhausted",
-        expect: int = 0,
-        timeout: float = 2.0,
         view: int = 2,
-        turns: str = "together",
     ) -> None:
-        if turns not in ("together", "sequential"):
-            raise ValueError(f"turns must be together or sequential, got {turns!r}")
         if until not in UNTIL:
             raise ValueError(f"until must be one of {', '.join(UNTIL)}, got {until!r}")
         if metric not in ("manhattan", "euclid"):
@@ -104,78 +95,88 @@ class GridServer:
         self.radio = radio
         self.metric = metric
         self.until = until
-        self.expect = expect
-        self.timeout = timeout
         self.view = view
-        self.turns = turns
         self.round = 0
-        self._acted: set[str] = set()  # sequential: who has acted in this round
+        self.bots: dict[str, _Bot] = {}
         self._over_at_start = False  # sequential: over() when this round began
-        self.robots: dict[str, _Bot] = {}
-        self.dropped: list[str] = []
-        self._started = expect <= 0
-        self._joins: dict[str, tuple[dict[str, Any], asyncio.Future[dict[str, Any]]]] = {}
-        self._actions: dict[str, dict[str, Any]] = {}
-        self._waiters: dict[str, asyncio.Future[Readings]] = {}
-        self._deadline: asyncio.TimerHandle | None = None
-        self._target = np.zeros(self.cells.shape, dtype=bool)
-        self._seen = np.zeros(self.cells.shape, dtype=bool)
+        self.target = np.zeros(self.cells.shape, dtype=bool)
+        self.seen = np.zeros(self.cells.shape, dtype=bool)
         self._readings: dict[str, Readings] = {}
-        #: Called with the server after every round (snapshots, recorders).
-        self.on_round: Callable[[GridServer], None] | None = None
 
-    # -- the three calls ----------------------------------------------------------------------
+    # -- the stepper protocol -------------------------------------------------------------------
 
-    async def join(self, robot: str, spec: dict[str, Any] | None = None) -> dict[str, Any]:
-        """Place ``robot`` (spec: ``start`` [row, col], ``view`` reach, ``eight``); returns
-        ``{"spec", "readings"}`` once it is in the world. A repeated join gets the same answer."""
-        if robot in self._joins:
-            return await asyncio.shield(self._joins[robot][1])
-        if robot in self.robots:
-            return {"spec": self._spec_of(self.robots[robot]), "readings": self._readings[robot]}
-        future: asyncio.Future[dict[str, Any]] = asyncio.get_running_loop().create_future()
-        self._joins[robot] = (dict(spec or {}), future)
-        if not self._started and len(self._joins) + len(self.robots) >= self.expect:
-            self._started = True
-        if self._started and not self._actions:  # at a round boundary: admit now
-            self._resolve(self._admit())
-        return await future
+    @property
+    def tick(self) -> int:
+        """Rounds done."""
+        return self.round
 
-    async def step(self, robot: str, round: int, action: dict[str, Any]) -> Readings:
-        """Hand in ``robot``'s action for round ``round``; returns its next perception.
+    def robots(self) -> Collection[str]:
+        """Names of the robots on the grid."""
+        return self.bots.keys()
 
-        An action for a round already done is a retry whose reply was lost: it gets the
-        current perception and is not applied again.
-        """
-        if robot not in self.robots:
-            raise RobotDropped(f"robot {robot!r} is not in the grid world")
-        if self.turns == "sequential":
-            return await self._step_in_turn(robot, round, action)
-        if round < self.round:
-            return self._readings[robot]
-        self._actions[robot] = action or {}
-        waiter = self._waiters.get(robot)
-        if waiter is None:
-            waiter = self._waiters[robot] = asyncio.get_running_loop().create_future()
-        self._maybe_step()
-        if not waiter.done() and self._deadline is None:
-            self._deadline = asyncio.get_running_loop().call_later(self.timeout, self._expire)
-        return await asyncio.shield(waiter)  # shared with retries: see WorldServer.step
+    def prepare(self, robot: str, spec: Mapping[str, Any] | None) -> dict[str, Any]:
+        """A join's settings (``start`` [row, col], ``view`` reach, ``eight``), checked when the
+        robot is placed."""
+        return dict(spec or {})
 
-    async def leave(self, robot: str) -> None:
-        """Take ``robot`` out of the world."""
-        self._remove(robot)
-        self._maybe_step()
+    def admit(self, robot: str, prepared: dict[str, Any]) -> None:
+        """Place ``robot`` on its start, the next free start, or the base."""
+        taken = {b.start for b in self.bots.values()}
+        free_starts = [s for s in self.starts if s not in taken]
+        bot = self._place(robot, prepared, free_starts)
+        self.bots[robot] = bot
+        self.target |= observable(self.cells, [self.grid.cell(bot.start)], bot.view)
 
-    def drop(self, robot: str, why: str) -> None:
-        """Take ``robot`` out now (e.g. its process left the team), with a log line."""
-        if robot in self.robots or robot in self._joins:
-            log.warning("robot %s %s: dropped at round %d", robot, why, self.round)
-            self.dropped.append(robot)
-            self._remove(robot)
-            self._maybe_step()
+    def start(self) -> None:
+        """Nothing to do: robots are placed in name order once the expected ones are in."""
 
-    # -- observation (for tools and tests) ------------------------------------------------------
+    def advance(self, commands: Mapping[str, Command]) -> None:
+        """Apply every robot's action in name order, then diffuse the pheromone."""
+        for name, action in commands.items():
+            self._apply(self.bots[name], action)
+        self.end_round()
+
+    def act(self, robot: str, command: Command) -> None:
+        """Sequential turns: apply ``robot``'s action now."""
+        self._apply(self.bots[robot], command)
+
+    def end_round(self) -> None:
+        """Diffuse the pheromone and count the round."""
+        if self.world.pheromone is not None:
+            self.world.pheromone.update()
+        self.round += 1
+        self.world.iteration = self.round
+
+    def begin_round(self) -> None:
+        """Sequential turns: note whether the run was over when this round began."""
+        self._over_at_start = self.over()
+
+    def readings(self, robot: str) -> Readings:
+        """``robot``'s last perception."""
+        return self._readings[robot]
+
+    def spec_of(self, robot: str) -> dict[str, Any]:
+        """What ``robot`` was placed with, and the radio medium's reach."""
+        return self._spec_of(self.bots[robot])
+
+    def remove(self, robot: str) -> None:
+        """Take ``robot`` off the grid."""
+        self.bots.pop(robot, None)
+        self._readings.pop(robot, None)
+
+    def sense(self) -> None:
+        """Every robot's perception, after all actions of the round."""
+        self._sense_all()
+
+    def sense_one(self, robot: str) -> Readings:
+        """Sequential turns: ``robot``'s perception just before its turn."""
+        self._sense(self.bots[robot])
+        readings = self._readings[robot]
+        readings["hears"] = self._hears(robot)
+        readings["over"] = self._over_at_start
+        return readings
+
+    # -- observation ------------------------------------------------------------------------------
 
     def over(self) -> bool:
         """Whether the observer's end of the run (``until``) is reached."""
@@ -183,126 +184,10 @@ class GridServer:
         if self.until == "exhausted":
             return w.remaining == 0
         if self.until == "delivered":
-            return w.remaining == 0 and not any(b.carried for b in self.robots.values())
+            return w.remaining == 0 and not any(b.carried for b in self.bots.values())
         if self.until == "explored":
-            return bool(self._target.any()) and not (self._target & ~self._seen).any()
+            return bool(self.target.any()) and not (self.target & ~self.seen).any()
         return False
-
-    def state(self) -> dict[str, Any]:
-        """A summary: round, robots and their cells, resources, deliveries, exploration."""
-        w = self.world
-        return {
-            "round": self.round,
-            "robots": {n: list(self.grid.cell(b.cell)) for n, b in sorted(self.robots.items())},
-            "moves": {n: b.moves for n, b in sorted(self.robots.items())},
-            "dropped": list(self.dropped),
-            "remaining": w.remaining,
-            "delivered": w.delivered,
-            "carried": sum(b.carried for b in self.robots.values()),
-            "observable": int(self._target.sum()),
-            "explored": int((self._target & self._seen).sum()),
-            "over": self.over(),
-            "turns": self.turns,
-        }
-
-    # -- stepping -----------------------------------------------------------------------------
-
-    def _maybe_step(self) -> None:
-        if self.turns == "sequential":
-            self._pump()
-            return
-        if self.robots and len(self._actions) >= len(self.robots):
-            self._advance()
-        elif not self.robots and self._joins:  # the last robot left while others joined
-            self._resolve(self._admit())
-
-    def _advance(self) -> None:
-        if self._deadline is not None:
-            self._deadline.cancel()
-            self._deadline = None
-        actions, self._actions = self._actions, {}
-        for name in sorted(actions):
-            if name in self.robots:
-                self._apply(self.robots[name], actions[name])
-        if self.world.pheromone is not None:
-            self.world.pheromone.update()
-        self.round += 1
-        self.world.iteration = self.round
-        admitted = self._admit()
-        self._sense_all()
-        self._resolve(admitted)
-        waiters, self._waiters = self._waiters, {}
-        for name, waiter in waiters.items():
-            if not waiter.done() and name in self.robots:
-                waiter.set_result(self._readings[name])
-        if self.on_round is not None:
-            self.on_round(self)
-
-    # -- sequential turns -------------------------------------------------------------------
-
-    async def _step_in_turn(self, robot: str, round: int, action: dict[str, Any]) -> Readings:
-        waiter = self._waiters.get(robot)
-        if round < self.round or (round == self.round and robot in self._acted):
-            # a retry of an action already applied: the reply it waits for, or the latest
-            return await asyncio.shield(waiter) if waiter is not None else self._readings[robot]
-        self._actions[robot] = {**(action or {}), "_round": round}
-        if waiter is None:
-            waiter = self._waiters[robot] = asyncio.get_running_loop().create_future()
-        self._pump()
-        return await asyncio.shield(waiter)
-
-    def _pump(self) -> None:
-        """Apply actions in turn for as long as the robot whose turn it is has sent one."""
-        while self.robots:
-            todo = [n for n in sorted(self.robots) if n not in self._acted]
-            if not todo:  # the round is complete
-                if self.world.pheromone is not None:
-                    self.world.pheromone.update()
-                self.round += 1
-                self.world.iteration = self.round
-                self._acted.clear()
-                self._resolve(self._admit())
-                self._over_at_start = self.over()
-                if self.on_round is not None:
-                    self.on_round(self)
-                continue
-            name = todo[0]
-            self._offer(name)
-            action = self._actions.get(name)
-            if action is None or action["_round"] != self.round:
-                break
-            del self._actions[name]
-            self._apply(self.robots[name], action)
-            self._acted.add(name)
-        if not self.robots and self._joins:
-            self._resolve(self._admit())
-        self._rearm()
-
-    def _offer(self, name: str) -> None:
-        """It is ``name``'s turn: its perception is ready; answer its previous action."""
-        waiter = self._waiters.get(name)
-        pending = self._actions.get(name)
-        if (
-            waiter is None
-            or waiter.done()
-            or (pending is not None and pending["_round"] == self.round)
-        ):
-            return
-        bot = self.robots[name]
-        self._sense(bot)
-        readings = self._readings[name]
-        readings["hears"] = self._hears(name)
-        readings["over"] = self._over_at_start
-        del self._waiters[name]
-        waiter.set_result(readings)
-
-    def _rearm(self) -> None:
-        """Sequential turns: time the robot whose turn it is, if anyone waits on it."""
-        if self._deadline is not None:
-            self._deadline.cancel()
-            self._deadline = None
-        if any(not w.done() for w in self._waiters.values()):
-            self._deadline = asyncio.get_running_loop().call_later(self.timeout, self._expire)
 
     def _apply(self, bot: _Bot, a: dict[str, Any]) -> None:
         w, c = self.world, bot.cell
@@ -329,39 +214,10 @@ class GridServer:
             target = (r + dr, col + dc)
             if self.grid.is_free(target):
                 j = self.grid.index(target)
-                if not (self.exclusive and any(b.cell == j for b in self.robots.values())):
+                if not (self.exclusive and any(b.cell == j for b in self.bots.values())):
                     bot.cell = j
                     bot.moved = True
                     bot.moves += 1
-
-    def _admit(self) -> list[tuple[str, asyncio.Future[dict[str, Any]]]]:
-        """Place the robots waiting to join, in name order (not sensed yet)."""
-        if not self._started or not self._joins:
-            return []
-        joins, self._joins = self._joins, {}
-        taken = {b.start for b in self.robots.values()}
-        free_starts = [s for s in self.starts if s not in taken]
-        admitted = []
-        for name in sorted(joins):
-            spec, future = joins[name]
-            try:
-                bot = self._place(name, spec, free_starts)
-            except ValueError as exc:
-                future.set_exception(exc)
-                continue
-            self.robots[name] = bot
-            self._target |= observable(self.cells, [self.grid.cell(bot.start)], bot.view)
-            admitted.append((name, future))
-        return admitted
-
-    def _resolve(self, admitted: list[tuple[str, asyncio.Future[dict[str, Any]]]]) -> None:
-        if admitted:
-            self._sense_all()
-        for name, future in admitted:
-            if not future.done() and name in self.robots:
-                future.set_result(
-                    {"spec": self._spec_of(self.robots[name]), "readings": self._readings[name]}
-                )
 
     def _place(self, name: str, spec: dict[str, Any], free_starts: list[int]) -> _Bot:
         if spec.get("start") is not None:
@@ -373,7 +229,7 @@ class GridServer:
             start = free_starts.pop(0)
         else:
             start = self.world.base
-        if self.exclusive and any(b.cell == start for b in self.robots.values()):
+        if self.exclusive and any(b.cell == start for b in self.bots.values()):
             raise ValueError(f"start {list(self.grid.cell(start))} of {name!r} is occupied")
         view = int(spec.get("view", self.view))
         return _Bot(name, start, start, bool(spec.get("eight", False)), view)
@@ -386,51 +242,11 @@ class GridServer:
             "metric": self.metric,
         }
 
-    def _expire(self) -> None:
-        self._deadline = None
-        if self.turns == "sequential":
-            todo = [n for n in sorted(self.robots) if n not in self._acted]
-            if todo and todo[0] not in self._actions:
-                log.warning(
-                    "robot %s did not take its turn in round %d within %.1f s: dropped",
-                    todo[0],
-                    self.round,
-                    self.timeout,
-                )
-                self.dropped.append(todo[0])
-                self._remove(todo[0])
-            self._pump()
-            return
-        for name in sorted(set(self.robots) - set(self._actions)):
-            log.warning(
-                "robot %s sent no action for round %d within %.1f s: dropped",
-                name,
-                self.round,
-                self.timeout,
-            )
-            self.dropped.append(name)
-            self._remove(name)
-        self._maybe_step()
-
-    def _remove(self, robot: str) -> None:
-        self.robots.pop(robot, None)
-        self._acted.discard(robot)
-        self._readings.pop(robot, None)
-        self._actions.pop(robot, None)
-        waiter = self._waiters.pop(robot, None)
-        if waiter is not None and not waiter.done():
-            waiter.set_exception(RobotDropped(f"robot {robot!r} left the grid world"))
-        joining = self._joins.pop(robot, None)
-        if joining is not None and not joining[1].done():
-            joining[1].cancel()
-
-    # -- perception ---------------------------------------------------------------------------
-
     def _sense_all(self) -> None:
-        for bot in self.robots.values():
+        for bot in self.bots.values():
             self._sense(bot)
         over = self.over()
-        for name in self.robots:
+        for name in self.bots:
             self._readings[name]["hears"] = self._hears(name)
             self._readings[name]["over"] = over
 
@@ -439,7 +255,7 @@ class GridServer:
         ph = w.pheromone.values if w.pheromone is not None else None
         c = bot.cell
         r, col = grid.cell(c)
-        occupied = {b.cell for b in self.robots.values() if b is not bot}
+        occupied = {b.cell for b in self.bots.values() if b is not bot}
         around = []
         for d, (dr, dc) in enumerate(OFFSETS[: 8 if bot.eight else 4]):
             cell = (r + dr, col + dc)
@@ -463,7 +279,7 @@ class GridServer:
         if bot.view > 0:
             for rr, cc, v in star_view(self.cells, (r, col), bot.view):
                 rays.append([rr - r, cc - col, v])
-                self._seen[rr, cc] = True
+                self.seen[rr, cc] = True
         br, bc = grid.cell(w.base)
         norm = math.hypot(br - r, bc - col)
         self._readings[bot.name] = {
@@ -484,12 +300,12 @@ class GridServer:
         }
 
     def _hears(self, name: str) -> list[str]:
-        me = self.robots[name]
+        me = self.bots[name]
         if self.radio is None:
-            return sorted(n for n in self.robots if n != name)
+            return sorted(n for n in self.bots if n != name)
         r0, c0 = self.grid.cell(me.cell)
         out = []
-        for other, bot in sorted(self.robots.items()):
+        for other, bot in sorted(self.bots.items()):
             if other == name:
                 continue
             r, c = self.grid.cell(bot.cell)
@@ -502,110 +318,98 @@ class GridServer:
                 out.append(other)
         return out
 
-    # -- snapshots ----------------------------------------------------------------------------
+
+class GridServer(LockstepDoor[GridStepper]):
+    """Runs a grid world in lock-step rounds for the robots that join it (see the module).
+
+    ``expect`` robots must join before the first round; ``timeout`` wall seconds of silence in
+    a round drop a robot; ``turns`` is ``together`` or ``sequential``. The other arguments are
+    :class:`GridStepper`'s.
+    """
+
+    def __init__(
+        self,
+        world: GridWorld,
+        *,
+        starts: Sequence[Cell] = (),
+        exclusive: bool = False,
+        radio: float | None = None,
+        metric: str = "euclid",
+        until: str = "exhausted",
+        expect: int = 0,
+        timeout: float = 2.0,
+        view: int = 2,
+        turns: str = "together",
+    ) -> None:
+        stepper = GridStepper(
+            world,
+            starts=starts,
+            exclusive=exclusive,
+            radio=radio,
+            metric=metric,
+            until=until,
+            view=view,
+        )
+        super().__init__(stepper, expect=expect, timeout=timeout, turns=turns)
+        self.world = world
+        self.grid = world.grid
+        #: Called with the server after every round (snapshots, recorders).
+        self.on_round: Callable[[GridServer], None] | None = None
+        self.on_tick.append(self._after_round)
+
+    def _after_round(self, commands: Mapping[str, Command]) -> None:
+        if self.on_round is not None:
+            self.on_round(self)
+
+    @property
+    def round(self) -> int:
+        """Rounds done."""
+        return self.stepper.round
+
+    @property
+    def robots(self) -> dict[str, _Bot]:
+        """The robots on the grid, by name."""
+        return self.stepper.bots
+
+    def over(self) -> bool:
+        """Whether the observer's end of the run (``until``) is reached."""
+        return self.stepper.over()
+
+    def state(self) -> dict[str, Any]:
+        """A summary: round, robots and their cells, resources, deliveries, exploration."""
+        st, w = self.stepper, self.world
+        bots = sorted(st.bots.items())
+        return {
+            "round": st.round,
+            "robots": {n: list(self.grid.cell(b.cell)) for n, b in bots},
+            "moves": {n: b.moves for n, b in bots},
+            "dropped": list(self.dropped),
+            "remaining": w.remaining,
+            "delivered": w.delivered,
+            "carried": sum(b.carried for _, b in bots),
+            "observable": int(st.target.sum()),
+            "explored": int((st.target & st.seen).sum()),
+            "over": st.over(),
+            "turns": self.turns,
+        }
 
     def snapshot_text(self) -> str:
-        """The field as text: ``#`` obstacle, ``B`` base, ``R`` resource, ``@`` robot,
-        ``*`` trail (coloured cell), ``+`` seen by a view ray, ``.`` other free cells; then one
-        line of the floor values (``-`` unmarked) per row."""
-        w, grid = self.world, self.grid
-        robots = {b.cell for b in self.robots.values()}
-        seen = self._seen.ravel()
-        lines = [
-            f"round {self.round}  remaining {w.remaining}  delivered {w.delivered}  "
-            f"explored {int((self._target & self._seen).sum())}/{int(self._target.sum())}"
-        ]
-        for r in range(grid.height):
-            row = []
-            for c in range(grid.width):
-                i = r * grid.width + c
-                if grid.obstacles[r, c]:
-                    ch = "#"
-                elif i in robots:
-                    ch = "@"
-                elif i == w.base:
-                    ch = "B"
-                elif w.resources[i] > 0:
-                    ch = "R"
-                elif w.colours[i]:
-                    ch = "*"
-                elif seen[i]:
-                    ch = "+"
-                else:
-                    ch = "."
-                row.append(ch)
-            lines.append("".join(row))
-        lines.append("values:")
-        for r in range(grid.height):
-            vals = w.marks[r * grid.width : (r + 1) * grid.width]
-            lines.append(" ".join("-" if v < 0 else str(v) for v in vals))
-        return "\n".join(lines) + "\n"
-
-    def snapshot(self, path: str) -> str:
-        """Write the field and trails to ``path`` (PNG if it ends in .png, else text)."""
-        p = Path(path)
-        p.parent.mkdir(parents=True, exist_ok=True)
-        if p.suffix.lower() != ".png":
-            p.write_text(self.snapshot_text())
-            return str(p)
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
-        w, grid = self.world, self.grid
-        marks = w.marks_array().astype(float)
-        marks[grid.obstacles | (marks < 0)] = np.nan
-        fig, ax = plt.subplots(figsize=(5, 5))
-        ax.imshow(grid.obstacles, cmap="Greys", vmin=0, vmax=1.5)
-        ax.imshow(marks, cmap="viridis", alpha=0.8)
-        trail = np.argwhere(w.colours_array() != 0)
-        if len(trail):
-            ax.scatter(trail[:, 1], trail[:, 0], s=12, c="orange", marker="s", label="trail")
-        res = np.argwhere(w.resources_array() > 0)
-        if len(res):
-            ax.scatter(res[:, 1], res[:, 0], s=60, c="green", marker="*", label="resource")
-        br, bc = grid.cell(w.base)
-        ax.scatter([bc], [br], s=60, c="red", marker="s", label="base")
-        pos = np.array([grid.cell(b.cell) for b in self.robots.values()]).reshape(-1, 2)
-        if len(pos):
-            ax.scatter(pos[:, 1], pos[:, 0], s=30, c="white", edgecolors="black", label="robot")
-        ax.set_title(f"round {self.round}, remaining {w.remaining}, delivered {w.delivered}")
-        ax.legend(fontsize=6, loc="upper right")
-        fig.tight_layout()
-        fig.savefig(p, dpi=100)
-        plt.close(fig)
-        return str(p)
-
-    async def aclose(self) -> None:
-        """Fail every pending call."""
-        if self._deadline is not None:
-            self._deadline.cancel()
-        for robot in list(self.robots) + list(self._joins):
-            self._remove(robot)
+        """The field as text (see :func:`sim_hw.grid.render_text`)."""
+        st = self.stepper
+        cells = [b.cell for b in st.bots.values()]
+        return render_text(self.world, st.round, cells, st.seen, st.target)
 
 
 def serve_grid(node: Any, server: GridServer) -> None:
-    """Export ``server``'s calls on ``node``: join, step, leave, state, snapshot."""
-
-    async def join(robot: str, spec: dict[str, Any]) -> dict[str, Any]:
-        return await server.join(robot, spec or None)
-
-    async def step(robot: str, round: int, action: dict[str, Any]) -> dict[str, Any]:
-        return await server.step(robot, round, action)
-
-    async def leave(robot: str) -> None:
-        await server.leave(robot)
+    """Export ``server``'s calls on ``node``: join, step, leave, and ``state`` and
+    ``snapshot`` (the field as text) for tools."""
+    serve(node, server)
 
     def state() -> dict[str, Any]:
         return server.state()
 
-    def snapshot(path: str) -> str:
-        return server.snapshot(path)
+    def snapshot() -> str:
+        return server.snapshot_text()
 
-    for fn in (join, step, leave, state, snapshot):
-        node.export(fn, name=fn.__name__)
-    # a robot process that dies leaves the team within milliseconds (its liveliness token
-    # goes); the lock-step timeout still catches one that hangs
-    # on_gone: a member whose link flaps (leaves and joins again within a second) keeps its body
-    node.team.on_gone(lambda name: server.drop(name, "left the team"))
+    node.export(state, name="state")
+    node.export(snapshot, name="snapshot")

@@ -191,40 +191,17 @@ def _cells(layout: dict[str, Any]) -> Any:
     return cell
 
 
-async def serve(
-    server: Any,
-    *,
-    name: str,
-    team: Any,
-    config: Any,
-    quit_when_empty: bool = False,
-    snapshots: str | None = None,
-) -> None:
-    """Open a node named ``name``, serve ``server`` and run until cancelled (or empty)."""
-    from mover import Node
-
-    from ._server import serve_grid
-
-    async with Node(name, team=team, kind="world", config=config) as node:
-        serve_grid(node, server)
-        print("READY", name, flush=True)
-        log.info("grid world %s serving as %r", server.grid, name)
-        try:
-            seen = False
-            while True:
-                await asyncio.sleep(0.05)
-                seen = seen or bool(server.robots)
-                if quit_when_empty and seen and not server.robots:
-                    break
-        finally:
-            if snapshots:
-                server.snapshot(str(Path(snapshots) / f"round-{server.round:06d}.txt"))
-            await server.aclose()
+def _write_snapshot(server: Any, where: Path) -> None:
+    where.mkdir(parents=True, exist_ok=True)
+    (where / f"round-{server.round:06d}.txt").write_text(server.snapshot_text())
 
 
 def run(args: argparse.Namespace) -> int:
     """Run a grid world process until interrupted (or --quit-when-empty)."""
     from mover import NodeConfig, Team
+    from sim_hw._process import run_world_process
+
+    from ._server import serve_grid
 
     if args.expect < 0:
         raise UsageError(f"--expect must be >= 0, got {args.expect}")
@@ -263,7 +240,7 @@ def run(args: argparse.Namespace) -> int:
                 )
                 if last != [mark]:
                     last[:] = [mark]
-                    s.snapshot(str(where / f"round-{s.round:06d}.txt"))
+                    _write_snapshot(s, where)
 
         server.on_round = on_round
     try:
@@ -272,15 +249,19 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(str(exc)) from None
     try:
         asyncio.run(
-            serve(
+            run_world_process(
                 server,
+                serve_grid,
                 name=args.name,
                 team=team,
                 config=config,
                 quit_when_empty=args.quit_when_empty,
-                snapshots=args.snapshots,
+                ready=lambda: print("READY", args.name, flush=True),
             )
         )
     except KeyboardInterrupt:
         return 130
+    finally:
+        if args.snapshots:
+            _write_snapshot(server, Path(args.snapshots))
     return 0

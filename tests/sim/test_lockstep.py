@@ -42,7 +42,7 @@ async def test_a_silent_robot_is_dropped(caplog: pytest.LogCaptureFixture) -> No
     server = WorldServer(World(random_obstacles((6.0, 6.0), 0)), expect=2, timeout=0.2)
     live, silent = await asyncio.gather(in_process(server, "live"), in_process(server, "silent"))
     del silent  # never ticks, as a killed process would not
-    caplog.set_level(logging.WARNING, logger="sim_hw.server")
+    caplog.set_level(logging.WARNING, logger="sim_hw.lockstep")
     start = time.monotonic()
     live.drive.set_velocity(0.2, 0.0)
     await asyncio.wait_for(live.clock.sleep(1.0), timeout=5.0)

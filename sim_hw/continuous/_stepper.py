@@ -1,0 +1,150 @@
+"""The pymunk world as the lock-step door drives it, and :class:`WorldServer`, the two together.
+
+:class:`WorldStepper` adapts a :class:`World` to the door's stepper protocol
+(``sim_hw._lockstep``): robots are in the world as soon as they join (``admits_early``) and
+are re-created in id order when the expected ones are in, so that the run does not depend on
+the order they came in — their first readings (from the join) may, so a deterministic robot
+ticks once before its first decision.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import inspect
+import logging
+from collections.abc import Awaitable, Callable, Collection, Mapping
+from dataclasses import asdict
+from typing import Any
+
+from sim_hw._lockstep import Command, LockstepDoor, Readings
+from sim_hw._process import STATE_TOPIC, serve
+
+from ._spec import RobotSpec
+from ._world import TICK, World
+from ._worldfile import parse_robot
+
+log = logging.getLogger("sim_hw.continuous")
+
+Snapshot = dict[str, Any]
+
+
+class WorldStepper:
+    """A :class:`World` behind the door: one tick is ``STEPS_PER_TICK`` physics steps."""
+
+    admits_early = True
+    words = ("command", "tick")
+
+    def __init__(self, world: World) -> None:
+        self.world = world
+
+    @property
+    def tick(self) -> int:
+        """Ticks done."""
+        return self.world.tick
+
+    def robots(self) -> Collection[str]:
+        """Ids of the robots in the world."""
+        return self.world.robots.keys()
+
+    def prepare(self, robot: str, spec: Mapping[str, Any] | None) -> RobotSpec:
+        """The world file's settings for ``robot``, overridden by ``spec`` (checked)."""
+        base = self.world.spec.robots.get(robot, self.world.spec.robot)
+        return parse_robot(dict(spec or {}), base, f"join({robot})")
+
+    def admit(self, robot: str, prepared: RobotSpec) -> None:
+        """Spawn ``robot``."""
+        self.world.add_robot(robot, prepared)
+
+    def start(self) -> None:
+        """Re-create the robots in id order (they came in arrival order; nothing has moved)."""
+        self.world.respawn_robots()
+
+    def advance(self, commands: Mapping[str, Command]) -> None:
+        """Set the commands and run one tick."""
+        for robot, command in commands.items():
+            self.world.set_command(robot, command)
+        self.world.step()
+
+    def sense(self) -> None:
+        """Nothing to do: the world measures at every tick and at every spawn."""
+
+    def readings(self, robot: str) -> Readings:
+        """``robot``'s readings from the end of the last tick."""
+        return self.world.readings(robot)
+
+    def spec_of(self, robot: str) -> dict[str, Any]:
+        """The settings ``robot`` was spawned with."""
+        return asdict(self.world.robots[robot].parts.spec)
+
+    def remove(self, robot: str) -> None:
+        """Take ``robot`` out of the world."""
+        self.world.remove_robot(robot)
+
+
+class WorldServer(LockstepDoor[WorldStepper]):
+    """Runs a :class:`World` in lock-step or in (scaled) real time for robots that join it.
+
+    ``expect`` robots must join before a lock-step world starts (0: start at the first join).
+    ``on_snapshot(snapshot)`` is called every ``snapshot_every`` ticks (0: never); it may be a
+    coroutine function. ``on_tick(world, commands)`` is called after every tick (a recorder).
+    """
+
+    def __init__(
+        self,
+        world: World,
+        *,
+        lockstep: bool = True,
+        speed: float = 1.0,
+        expect: int = 0,
+        timeout: float = 2.0,
+        snapshot_every: int = 0,
+        on_snapshot: Callable[[Snapshot], Any] | None = None,
+        on_tick: Callable[[World, Mapping[str, Command]], None] | None = None,
+    ) -> None:
+        if speed <= 0:
+            raise ValueError("speed must be positive")
+        super().__init__(
+            WorldStepper(world),
+            expect=expect,
+            timeout=timeout,
+            speed=None if lockstep else speed,
+            period=TICK,
+        )
+        self.world = world
+        self.snapshot_every = snapshot_every
+        self.on_snapshot = on_snapshot
+        self._tasks: set[asyncio.Task[Any]] = set()
+        if on_tick is not None:
+            self.on_tick.append(lambda commands: on_tick(world, commands))
+        self.on_tick.append(self._publish)
+
+    def _publish(self, commands: Mapping[str, Command]) -> None:
+        every, send = self.snapshot_every, self.on_snapshot
+        if not every or send is None or self.world.tick % every:
+            return
+        result = send(self.world.snapshot())
+        if inspect.isawaitable(result):
+            task = asyncio.ensure_future(_quietly(result))
+            self._tasks.add(task)
+            task.add_done_callback(self._tasks.discard)
+
+    async def aclose(self) -> None:
+        """Stop the real-time clock, fail every pending call, finish the snapshots sent."""
+        await super().aclose()
+        for task in list(self._tasks):
+            await task
+
+
+async def _quietly(awaitable: Awaitable[Any]) -> None:
+    try:
+        await awaitable
+    except Exception as exc:  # a lost snapshot must not stop the world
+        log.debug("snapshot hook failed: %s", exc)
+
+
+def serve_world(node: Any, server: WorldServer, *, state_topic: str = STATE_TOPIC) -> None:
+    """Export ``server``'s three calls on ``node`` and send its snapshots to ``state_topic``."""
+    serve(node, server)
+    if server.on_snapshot is None and server.snapshot_every:
+        send = getattr(node, "broadcast_nowait", None) or node.broadcast
+        server.on_snapshot = lambda snap: send(state_topic, snap)
