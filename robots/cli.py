@@ -1,35 +1,59 @@
-"""`mover robot` (and ``python -m robots``): start one robot process."""
+"""`mover robot` (and ``python -m robots``): start one robot process.
+
+The hardware backend is chosen by name (``--hardware``: an installed ``mover.hardware`` entry
+point, or ``none`` for a workstation) and its options pass through untouched: ``--world NAME``
+is the option ``world``, and ``--option KEY=VALUE`` (repeatable) any option, its value parsed as
+JSON when it parses (``3``, ``0.5``, ``true``, ``"text"``), else kept as the string given. The
+backend says which options it takes (``robots.backend``); any other is a one-line usage error.
+"""
 
 from __future__ import annotations
 
 import argparse
 import asyncio
 import json
-import logging
-import os
 import sys
 import tomllib
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from mover import NodeConfig, Team
+from mover.cli import (
+    UsageError,
+    add_log_arguments,
+    add_team_arguments,
+    setup_logging,
+    team_from_args,
+)
 
-from .process import run_robot
+from .process import NO_HARDWARE, run_robot
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
+    """The robot process's options (the logging options are the caller's: ``mover`` has them)."""
     p.add_argument("--name", required=True, help="the robot's name in the team")
-    p.add_argument("--team", help="team name (default $MOVER_TEAM); key from $MOVER_TEAM_KEY")
+    add_team_arguments(p)
     p.add_argument("--kind", help="the robot's kind (default: from --team-file, else 'robot')")
     p.add_argument(
         "--hardware",
         default="sim",
-        help="hardware backend: sim (world process over zenoh), none (workstation)",
+        help="hardware backend, a mover.hardware entry point (sim: the continuous world "
+        f"process, grid: the grid world process), or {NO_HARDWARE} (a workstation); "
+        "default sim",
     )
     p.add_argument(
         "--world",
         default=None,
-        help="name of the world process (sim: 'world', grid: 'gridworld' by default)",
+        metavar="NAME",
+        help="name of the world process: the backend's option 'world' (each backend has a "
+        "default: sim 'world', grid 'gridworld')",
+    )
+    p.add_argument(
+        "--option",
+        action="append",
+        metavar="KEY=VALUE",
+        help="a backend option (e.g. call_timeout=60); VALUE is JSON if it parses, else a "
+        "string; repeatable",
     )
     p.add_argument("--spec", metavar="JSON", help="the robot's body and devices, as JSON")
     p.add_argument(
@@ -37,12 +61,31 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         metavar="TOML",
         help="a team file: [[robots]] entries with name, kind and spec",
     )
-    p.add_argument(
-        "--connect",
-        action="append",
-        metavar="ENDPOINT",
-        help="zenoh endpoint of a team member or router; repeatable",
-    )
+
+
+def backend_options(world: str | None, items: Sequence[str]) -> dict[str, Any]:
+    """The backend options of ``--world`` and of each ``--option KEY=VALUE``.
+
+    A VALUE that parses as JSON is that value; any other is the string itself. Raises
+    :class:`~mover.cli.UsageError` for an item without ``KEY=`` or a key given twice.
+    """
+    options: dict[str, Any] = {}
+    for item in items:
+        key, sep, text = item.partition("=")
+        key = key.strip()
+        if not sep or not key:
+            raise UsageError(f"--option {item!r}: expected KEY=VALUE")
+        if key in options:
+            raise UsageError(f"--option {key}= is given twice")
+        try:
+            options[key] = json.loads(text)
+        except json.JSONDecodeError:
+            options[key] = text
+    if world is not None:
+        if "world" in options:
+            raise UsageError("the world is given twice: --world and --option world=")
+        options["world"] = world
+    return options
 
 
 def register_robot(sub: Any) -> None:
@@ -53,8 +96,6 @@ def register_robot(sub: Any) -> None:
 
 
 def _member(path: str, name: str) -> dict[str, Any]:
-    from mover._cli import UsageError
-
     try:
         data = tomllib.loads(Path(path).read_text())
     except (OSError, tomllib.TOMLDecodeError) as exc:
@@ -71,8 +112,7 @@ def _member(path: str, name: str) -> dict[str, Any]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from mover._cli import UsageError
-
+    """Run the robot process of ``add_arguments``' options until interrupted."""
     entry: dict[str, Any] = _member(args.team_file, args.name) if args.team_file else {}
     spec = dict(entry.get("spec", {}))
     if args.spec:
@@ -80,17 +120,9 @@ def run(args: argparse.Namespace) -> int:
             spec.update(json.loads(args.spec))
         except json.JSONDecodeError as exc:
             raise UsageError(f"--spec is not JSON: {exc.msg}") from None
-    try:
-        team = Team.from_env(args.team)
-        config = NodeConfig.from_env(args.connect or ())
-    except ValueError as exc:
-        raise UsageError(str(exc)) from None
+    team, config = team_from_args(args)
     kind = args.kind or entry.get("kind", "robot")
-    options: dict[str, Any] = {}
-    if args.hardware == "sim":
-        options = {"world": args.world or "world"}
-    elif args.hardware == "grid" and args.world:
-        options = {"world": args.world}
+    options = backend_options(args.world, args.option or ())
     try:
         asyncio.run(
             run_robot(
@@ -104,7 +136,7 @@ def run(args: argparse.Namespace) -> int:
                 ready=lambda: print("READY", flush=True),
             )
         )
-    except ValueError as exc:
+    except ValueError as exc:  # an unknown backend or option, found before anything starts
         raise UsageError(str(exc)) from None
     return 0
 
@@ -113,12 +145,10 @@ def main() -> int:
     """``python -m robots``."""
     p = argparse.ArgumentParser(prog="python -m robots", description="run one robot process")
     add_arguments(p)
+    add_log_arguments(p)
     args = p.parse_args()
-    level = os.environ.get("MOVER_LOG_LEVEL", "INFO").upper()
-    logging.basicConfig(level=level, format="%(asctime)s %(name)s %(levelname)s %(message)s")
-    from mover._cli import UsageError
-
     try:
+        setup_logging(args, default="INFO")
         return run(args)
     except UsageError as exc:
         print(f"robots: {exc}", file=sys.stderr)

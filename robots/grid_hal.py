@@ -22,7 +22,7 @@ from __future__ import annotations
 
 from contextlib import AbstractAsyncContextManager
 from dataclasses import dataclass
-from typing import Any, Protocol, runtime_checkable
+from typing import Protocol, runtime_checkable
 
 __all__ = [
     "FREE",
@@ -242,8 +242,12 @@ class GridRadio(Protocol):
 
 @dataclass(frozen=True, slots=True)
 class GridHardware:
-    """Everything a grid robot can touch. ``sonar``/``bumper``/``camera``/``led``/``push`` are
-    always None: they are there so generic robot-process code that looks for them works."""
+    """Everything a grid robot can touch.
+
+    It has no sonar, bumper, camera, LED or push test: code that serves both kinds of robot
+    takes what they share (``clock``, ``drive``, ``odometry``, ``radio``) or is told which
+    hardware it has (``robots.backend``: each backend names the procedures its hardware offers).
+    """
 
     id: str
     clock: RoundClock
@@ -253,8 +257,3 @@ class GridHardware:
     floor: GridFloor
     gripper: GridGripper
     radio: GridRadio | None = None
-    sonar: Any = None
-    bumper: Any = None
-    camera: Any = None
-    led: Any = None
-    push: Any = None

@@ -3,9 +3,10 @@
 ``python -m robots --name ernst`` (or ``mover robot --name ernst``) opens a node in the team
 given by the environment (``MOVER_TEAM``, ``MOVER_TEAM_KEY``, ``MOVER_CONNECT``...), connects to
 its hardware through a backend chosen by name where the process is launched (the
-``mover.hardware`` entry points: ``sim`` is the simulated world over zenoh; ``none`` is a
-workstation without a body), exports a few procedures of its own, hosts the installed programs
-(the ``mover.programs`` entry points) and keeps its hardware's clock ticking while idle.
+``mover.hardware`` entry points, each a :class:`~robots.backend.HardwareBackend`: ``sim`` is the
+continuous world over zenoh, ``grid`` the grid world; ``none`` is a workstation without a body),
+exports the procedures its backend offers for that hardware, hosts the installed programs (the
+``mover.programs`` entry points) and keeps its hardware's clock ticking while idle.
 """
 
 from __future__ import annotations
@@ -14,22 +15,51 @@ import asyncio
 import contextlib
 import logging
 from collections.abc import Callable, Mapping
-from importlib.metadata import entry_points
+from importlib.metadata import EntryPoint, entry_points
 from typing import Any
 
 from mover import Node, NodeConfig, ProgramHost, Team
 
 from ._robot import Robot
-from .hal import Hardware
+from .backend import H, HardwareBackend, check_options
 
 log = logging.getLogger("robots.process")
 
-HardwareFactory = Callable[..., Any]  # async (node, robot_id, spec, **options) -> Hardware
+#: The ``--hardware`` of a member without a body (a workstation): no backend, no options.
+NO_HARDWARE = "none"
 
 
-def hardware_backends() -> dict[str, Any]:
+def hardware_backends() -> dict[str, EntryPoint]:
     """The installed hardware backends (``mover.hardware`` entry points), not loaded yet."""
     return {ep.name: ep for ep in entry_points(group="mover.hardware")}
+
+
+def load_backend(
+    hardware: str, options: Mapping[str, Any] | None = None
+) -> HardwareBackend[Any] | None:
+    """The backend named ``hardware``, its ``options`` checked; None for ``"none"``.
+
+    Raises ValueError for an unknown backend, an entry point that is not a backend, or an
+    option the backend does not take (the message names the backend's options).
+    """
+    if hardware == NO_HARDWARE:
+        if options:
+            raise ValueError(f"hardware {NO_HARDWARE!r} takes no options, got {sorted(options)}")
+        return None
+    backends = hardware_backends()
+    if hardware not in backends:
+        raise ValueError(
+            f"no hardware backend {hardware!r} (installed: "
+            f"{', '.join(sorted(backends)) or 'none'}; {NO_HARDWARE!r} for a workstation)"
+        )
+    backend = backends[hardware].load()
+    if not isinstance(backend, HardwareBackend):
+        raise ValueError(
+            f"hardware entry point {hardware!r} ({backends[hardware].value}) is not a "
+            "HardwareBackend (options, connect, procedures)"
+        )
+    check_options(hardware, backend, options or {})
+    return backend
 
 
 def installed_programs() -> dict[str, Callable[..., Any]]:
@@ -41,32 +71,6 @@ def installed_programs() -> dict[str, Callable[..., Any]]:
         except Exception as exc:  # one broken program must not stop the robot
             log.warning("program %r is unavailable: %s", ep.name, exc)
     return found
-
-
-def _procedures(robot: Robot) -> dict[str, Callable[..., Any]]:
-    hw = robot.hw
-
-    def pose() -> list[float]:
-        """The robot's dead-reckoned pose (x, y, heading)."""
-        return list(hw.odometry.pose())
-
-    def stop() -> None:
-        """Stop the motors."""
-        hw.drive.stop()
-
-    def sense() -> dict[str, Any]:
-        """What the robot senses now."""
-        return {
-            "time": hw.clock.now(),
-            "pose": list(hw.odometry.pose()),
-            "sonar": list(hw.sonar.ranges()) if hw.sonar else None,
-            "bumper": hw.bumper.side() if hw.bumper else None,
-            "camera": [[s.kind, s.id, s.status, s.range, s.bearing] for s in hw.camera.sightings()]
-            if hw.camera
-            else None,
-        }
-
-    return {"robot.pose": pose, "robot.stop": stop, "robot.sense": sense}
 
 
 async def run_robot(
@@ -81,43 +85,56 @@ async def run_robot(
     programs: Mapping[str, Callable[..., Any]] | None = None,
     ready: Callable[[], None] | None = None,
 ) -> None:
-    """Run one robot process until cancelled."""
+    """Run one robot process until cancelled.
+
+    ``hardware`` names a backend (``mover.hardware`` entry points) or is ``"none"``; ``options``
+    go to its ``connect`` and are checked against its ``options`` before anything starts.
+    """
+    backend = load_backend(hardware, options)
     async with Node(name, team, kind=kind, config=config) as node:
         if programs is None:
             programs = installed_programs()
         # Export first, so that a launcher that sees this member can start programs at once;
         # they wait until the hardware is up.
-        host = ProgramHost(node, programs, robot=None, ready=hardware == "none")
-        if hardware == "none":  # a workstation: a member without a body
-            host.robot = Robot(name, None, node, kind)  # type: ignore[arg-type]
+        host = ProgramHost(node, programs, robot=None, ready=backend is None)
+        if backend is None:  # a workstation: a member without a body
+            workstation: Robot[None] = Robot(name, None, node, kind)
+            host.robot = workstation
             if ready:
                 ready()
             await asyncio.Event().wait()
-        backends = hardware_backends()
-        if hardware not in backends:
-            raise ValueError(
-                f"no hardware backend {hardware!r} (installed: "
-                f"{', '.join(sorted(backends)) or 'none'})"
-            )
-        hw: Hardware = await backends[hardware].load()(node, name, spec or {}, **(options or {}))
-        if hw.radio is not None:
-            node.radio.locator = hw.radio  # ground truth, for the range-limited broadcast only
-        robot = Robot(name, hw, node, kind)
-        for proc_name, fn in _procedures(robot).items():
-            node.export(fn, proc_name)
-        host.robot = robot
-        host.ready.set()
-        log.info("%s (%s) ready with programs %s", name, kind, sorted(programs))
-        if ready:
-            ready()
-        try:
-            while True:  # keep the clock going while idle (lock-step worlds wait for us)
-                # Let the tasks the last readings woke set their commands first, so that a
-                # program's command is never a tick late because this loop ticked before it.
-                for _ in range(3):
-                    await asyncio.sleep(0)
-                await hw.clock.tick()
-        finally:
-            hw.drive.stop()
-            with contextlib.suppress(Exception):
-                await asyncio.wait_for(hw.clock.tick(), 1.0)
+            return
+        await _serve(node, host, backend, kind, spec or {}, options or {}, ready)
+
+
+async def _serve(
+    node: Node,
+    host: ProgramHost,
+    backend: HardwareBackend[H],
+    kind: str,
+    spec: Mapping[str, Any],
+    options: Mapping[str, Any],
+    ready: Callable[[], None] | None,
+) -> None:
+    hw = await backend.connect(node, node.name, spec, **options)
+    if hw.radio is not None:
+        node.radio.locator = hw.radio  # ground truth, for the range-limited broadcast only
+    for proc_name, fn in backend.procedures(hw).items():
+        node.export(fn, proc_name)
+    robot: Robot[H] = Robot(node.name, hw, node, kind)
+    host.robot = robot
+    host.ready.set()
+    log.info("%s (%s) ready with programs %s", node.name, kind, sorted(host.programs))
+    if ready:
+        ready()
+    try:
+        while True:  # keep the clock going while idle (lock-step worlds wait for us)
+            # Let the tasks the last readings woke set their commands first, so that a
+            # program's command is never a tick late because this loop ticked before it.
+            for _ in range(3):
+                await asyncio.sleep(0)
+            await hw.clock.tick()
+    finally:
+        hw.drive.stop()
+        with contextlib.suppress(Exception):
+            await asyncio.wait_for(hw.clock.tick(), 1.0)

@@ -28,20 +28,36 @@ async def test_robot_and_workstation_run_a_program_together() -> None:
         assert outcomes["ernst"]["result"]["me"]["nearest"] == "moseley"
 
 
-async def test_unknown_hardware_backend_is_a_clear_error() -> None:
+async def robot_process(*args: str) -> tuple[int, str]:
+    """``python -m robots ARGS`` that is expected to stop at once; (exit code, stderr)."""
     proc = await asyncio.create_subprocess_exec(
         sys.executable,
         "-m",
         "robots",
-        "--name",
-        "x",
-        "--hardware",
-        "warp",
+        *args,
         env={**os.environ, "MOVER_TEAM": "alpha", "MOVER_TEAM_KEY": "ab" * 32},
         cwd=ROOT,
         stdout=asyncio.subprocess.PIPE,
         stderr=asyncio.subprocess.PIPE,
     )
     _, err = await asyncio.wait_for(proc.communicate(), 30)
-    assert proc.returncode == 2
-    assert b"no hardware backend 'warp'" in err
+    return proc.returncode or 0, err.decode()
+
+
+async def test_unknown_hardware_backend_is_a_clear_error() -> None:
+    code, err = await robot_process("--name", "x", "--hardware", "warp")
+    assert code == 2
+    assert "no hardware backend 'warp'" in err
+
+
+async def test_an_unknown_backend_option_is_a_one_line_usage_error() -> None:
+    code, err = await robot_process("--name", "x", "--hardware", "grid", "--option", "wrld=3")
+    assert code == 2
+    assert err.splitlines() == [
+        "robots: hardware backend 'grid' takes no option 'wrld' "
+        "(its options: call_timeout, idle_period, world)"
+    ]
+    code, err = await robot_process("--name", "x", "--hardware", "none", "--world", "w")
+    assert code == 2 and err.startswith("robots: hardware 'none' takes no options")
+    code, err = await robot_process("--name", "x", "--option", "timeout", "--log-level", "error")
+    assert (code, err) == (2, "robots: --option 'timeout': expected KEY=VALUE\n")
