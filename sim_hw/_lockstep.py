@@ -144,12 +144,18 @@ class LockstepDoor(Generic[S]):
         self._acted: set[str] = set()  # sequential: who has acted in this round
         self._deadline: asyncio.TimerHandle | None = None
         self._clock_task: asyncio.Task[None] | None = None
+        self._background: set[asyncio.Task[Any]] = set()
         self._closed = False
 
     @property
     def lockstep(self) -> bool:
         """Whether the world waits for every robot (not real time)."""
         return self.speed is None
+
+    def keep(self, task: asyncio.Task[Any]) -> None:
+        """Own ``task`` (e.g. a transport's reader): :meth:`aclose` cancels it."""
+        self._background.add(task)
+        task.add_done_callback(self._background.discard)
 
     # -- the three calls ----------------------------------------------------------------------
 
@@ -436,3 +442,7 @@ class LockstepDoor(Generic[S]):
                     raise
         for robot in [*self.stepper.robots(), *self._joins]:
             self._remove(robot)
+        background = list(self._background)
+        for task in background:
+            task.cancel()
+        await asyncio.gather(*background, return_exceptions=True)

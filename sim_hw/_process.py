@@ -15,19 +15,31 @@ import logging
 from collections.abc import Callable
 from typing import Any
 
-from sim_hw._lockstep import LockstepDoor
+from mover import MoverError, pack
+from sim_hw._caller import frame_topics
+from sim_hw._lockstep import LockstepDoor, RobotDropped
 
 log = logging.getLogger("sim_hw.process")
+
+COMMAND_QUEUE = 10_000
+"""Command frames a world keeps unread at most."""
 
 STATE_TOPIC = "world/state"
 """The team-wide topic on which a world process streams its snapshots."""
 
 
-def serve(node: Any, door: LockstepDoor[Any]) -> None:
-    """Export ``door``'s three calls on ``node`` and drop the robots whose process left."""
+def serve(node: Any, door: LockstepDoor[Any], *, frames: bool = True) -> None:
+    """Export ``door``'s three calls on ``node`` and drop the robots whose process left.
+
+    With ``frames`` (and robots acting together), ticks are also taken and answered as frames
+    (see ``sim_hw._caller``): the join's answer says so.
+    """
+    offered = frames and door.turns == "together"
+    if offered:
+        _TickFrames(node, door)
 
     async def join(robot: str, spec: dict[str, Any]) -> dict[str, Any]:
-        return await door.join(robot, spec or None)
+        return {**await door.join(robot, spec or None), "frames": offered}
 
     async def step(robot: str, tick: int, command: dict[str, Any]) -> dict[str, Any]:
         return await door.step(robot, tick, command)
@@ -38,6 +50,70 @@ def serve(node: Any, door: LockstepDoor[Any]) -> None:
     for fn in (join, step, leave):
         node.export(fn, name=fn.__name__)
     node.team.on_gone(lambda name: door.drop(name, "left the team"))
+
+
+class _TickFrames:
+    """The world's end of the tick frames: commands in, one frame of readings out per tick."""
+
+    def __init__(self, node: Any, door: LockstepDoor[Any]) -> None:
+        self.node, self.door = node, door
+        commands, self.topic = frame_topics(node.name)
+        self.pending: dict[str, int] = {}  # robot -> the tick it waits on by frame
+        self.refused = 0
+        self.sub = node.subscribe(commands, maxlen=COMMAND_QUEUE)
+        door.on_tick.append(self.flush)
+        door.keep(asyncio.get_running_loop().create_task(self.run()))
+
+    async def run(self) -> None:
+        async for msg in self.sub:
+            self.take(msg.sender, msg.data)
+
+    def take(self, sender: str, data: Any) -> None:
+        """One robot's command for a tick; only its sender may hand it in."""
+        if not (
+            isinstance(data, list)
+            and len(data) == 3
+            and data[0] == sender
+            and type(data[1]) is int
+            and isinstance(data[2], dict)
+        ):
+            self.refused += 1
+            log.debug("a malformed command frame from %r", sender)
+            return
+        robot, tick, command = data
+        self.pending[robot] = tick
+        try:
+            waiter = self.door.submit(robot, tick, command)
+        except RobotDropped:  # the robot's fallback call will be told
+            self.pending.pop(robot, None)
+            return
+        waiter.add_done_callback(_consumed)
+        if waiter.done() and robot in self.pending:  # a retry for a tick already done
+            del self.pending[robot]
+            self.send({robot: pack(waiter.result())})
+
+    def flush(self, commands: Any) -> None:
+        """The tick is done: one frame with the readings of every robot that asked by frame."""
+        if not self.pending:
+            return
+        st = self.door.stepper
+        robots = st.robots()
+        entries = {r: pack(st.readings(r)) for r in self.pending if r in robots}
+        self.pending.clear()
+        if entries:
+            self.send(entries)
+
+    def send(self, entries: dict[str, bytes]) -> None:
+        frame = {"tick": self.door.stepper.tick, "readings": entries}
+        try:
+            self.node.broadcast_nowait(self.topic, frame, reliable=True)
+        except MoverError as exc:  # too large, or the node closing: robots will ask by call
+            log.warning("tick frame not sent: %s", exc)
+
+
+def _consumed(waiter: asyncio.Future[Any]) -> None:
+    if not waiter.cancelled():
+        waiter.exception()  # retrieved: a dropped robot's waiter is no one's error
 
 
 async def run_world_process(

@@ -2,9 +2,10 @@
 
 One class, :class:`SimHardware`, serves both backends: it caches the readings of the last tick,
 collects the commands for the next one, and exchanges them through an ``exchange(tick,
-command) -> readings`` coroutine — a direct call into a :class:`WorldServer` in process, or one
-zenoh call per tick to the world process. Concurrent waiters on a tick share one exchange, so a
-robot sends exactly one command per tick however many of its tasks wait.
+command) -> readings`` coroutine from ``sim_hw._caller`` — a direct call into a
+:class:`WorldServer` in process, or one exchange of frames per tick with the world process.
+Concurrent waiters on a tick share one exchange, so a robot sends exactly one command per tick
+however many of its tasks wait.
 """
 
 from __future__ import annotations
@@ -12,8 +13,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import math
-import time
-from collections.abc import AsyncIterator, Awaitable, Callable
+from collections.abc import AsyncIterator, Mapping
 from typing import Any
 
 from robots.hal import (
@@ -23,10 +23,10 @@ from robots.hal import (
     PushResult,
     Sighting,
 )
+from sim_hw import _caller
+from sim_hw._caller import Exchange
 
 from ._world import TICK, Command, Readings
-
-Exchange = Callable[[int, Command], Awaitable[Readings]]
 
 PUSH_SPEED = 0.2
 """Forward speed (m/s) a push test asks for; the force bound decides whether it is reached."""
@@ -272,61 +272,27 @@ class _Push:
         self.push = hw.push
 
 
-async def in_process(server: Any, robot_id: str, spec: dict[str, Any] | None = None) -> Hardware:
+async def in_process(server: Any, robot_id: str, spec: Mapping[str, Any] | None = None) -> Hardware:
     """Join ``server`` (a :class:`WorldServer` in this process) and return the robot's HAL."""
-    joined = await server.join(robot_id, spec)
-
-    async def exchange(tick: int, command: Command) -> Readings:
-        readings: Readings = await server.step(robot_id, tick, command)
-        return readings
-
+    joined, exchange = await _caller.in_process(server, robot_id, spec)
     return SimHardware(robot_id, joined["spec"], joined["readings"], exchange).hardware()
-
-
-def world_caller(node: Any, world: str, call_timeout: float) -> Callable[..., Awaitable[Any]]:
-    """``call(procedure, *args)`` on the world process, asked again while it looks lost.
-
-    The world may look lost for a moment when the machine is overloaded (a missed lease);
-    its calls (join, step) are idempotent, so wait for it to be back and ask again, until
-    ``call_timeout`` seconds have passed.
-    """
-    from mover import RobotLost, UnknownRobot
-
-    async def call(procedure: str, *args: Any) -> Any:
-        deadline = time.monotonic() + call_timeout
-        while True:
-            left = deadline - time.monotonic()
-            if world not in node.team:
-                await node.team.wait_for([world], timeout=max(left, 0.1))
-            try:
-                return await node.call(world, procedure, *args, timeout=max(left, 0.1))
-            except (RobotLost, UnknownRobot):
-                if time.monotonic() >= deadline:
-                    raise
-                await asyncio.sleep(0.05)
-
-    return call
 
 
 async def remote(
     node: Any,
     robot_id: str,
-    spec: dict[str, Any] | None = None,
+    spec: Mapping[str, Any] | None = None,
     *,
     world: str = "world",
     call_timeout: float = 30.0,
 ) -> Hardware:
     """Join the world process ``world`` over ``node`` (a ``mover.Node``); return the HAL.
 
-    One call per tick each way: ``step(robot, tick, command) -> readings``. ``call_timeout``
-    must outlast the world's own drop timeout, since in lock-step a reply waits for every robot.
-    The robot's id must be its node's name: the world drops the robot when that member leaves.
+    One exchange per tick (a frame each way where the world offers it, else a call; see
+    ``sim_hw._caller``). ``call_timeout`` must outlast the world's own drop timeout, since in
+    lock-step a reply waits for every robot. The robot's id must be its node's name.
     """
-    call = world_caller(node, world, call_timeout)
-    joined = await call("join", robot_id, spec or {})
-
-    async def exchange(tick: int, command: Command) -> Readings:
-        readings: Readings = await call("step", robot_id, tick, command)
-        return readings
-
+    joined, exchange = await _caller.remote(
+        node, robot_id, spec, world=world, call_timeout=call_timeout
+    )
     return SimHardware(robot_id, joined["spec"], joined["readings"], exchange).hardware()

@@ -14,12 +14,12 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import contextvars
-from collections.abc import AsyncIterator, Awaitable, Callable
+from collections.abc import AsyncIterator, Mapping
 from typing import Any
 
 from robots.grid_hal import OFFSETS, GridHardware, Here, Near, Seen
-
-Exchange = Callable[[int, dict[str, Any]], Awaitable[dict[str, Any]]]
+from sim_hw import _caller
+from sim_hw._caller import Exchange
 
 _OWNER: contextvars.ContextVar[object | None] = contextvars.ContextVar("grid_owner", default=None)
 
@@ -230,14 +230,10 @@ class _View:
 
 
 async def in_process(
-    server: Any, robot_id: str, spec: dict[str, Any] | None = None, *, idle_period: float = 0.0
+    server: Any, robot_id: str, spec: Mapping[str, Any] | None = None, *, idle_period: float = 0.0
 ) -> GridHardware:
-    """Join ``server`` (a :class:`~sim_hw.grid._server.GridServer` in this process)."""
-    joined = await server.join(robot_id, spec)
-
-    async def exchange(round: int, action: dict[str, Any]) -> dict[str, Any]:
-        return await server.step(robot_id, round, action)  # type: ignore[no-any-return]
-
+    """Join ``server`` (a :class:`~sim_hw.grid.GridServer` in this process)."""
+    joined, exchange = await _caller.in_process(server, robot_id, spec)
     return GridRobot(
         robot_id, joined["spec"], joined["readings"], exchange, idle_period=idle_period
     ).hardware()
@@ -246,7 +242,7 @@ async def in_process(
 async def connect(
     node: Any,
     robot_id: str,
-    spec: dict[str, Any] | None = None,
+    spec: Mapping[str, Any] | None = None,
     *,
     world: str = "gridworld",
     call_timeout: float = 30.0,
@@ -254,18 +250,13 @@ async def connect(
 ) -> GridHardware:
     """Join the grid world process ``world`` over ``node`` (a ``mover.Node``); return the HAL.
 
-    The ``grid`` hardware backend. One call per round: ``step(robot, round, action) ->
-    perception``. ``call_timeout`` must outlast the world's drop timeout. The robot's id must
-    be its node's name: the world drops the robot when that member leaves the team.
+    One exchange per round (a frame each way where the world offers it, else a call; see
+    ``sim_hw._caller``). ``call_timeout`` must outlast the world's drop timeout. The robot's id
+    must be its node's name: the world drops the robot when that member leaves the team.
     """
-    from sim_hw.continuous._hardware import world_caller
-
-    call = world_caller(node, world, call_timeout)
-    joined = await call("join", robot_id, spec or {})
-
-    async def exchange(round: int, action: dict[str, Any]) -> dict[str, Any]:
-        return await call("step", robot_id, round, action)  # type: ignore[no-any-return]
-
+    joined, exchange = await _caller.remote(
+        node, robot_id, spec, world=world, call_timeout=call_timeout
+    )
     return GridRobot(
         robot_id, joined["spec"], joined["readings"], exchange, idle_period=idle_period
     ).hardware()

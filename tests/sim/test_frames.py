@@ -1,0 +1,93 @@
+"""One exchange per tick: commands and readings as frames, over real zenoh sessions on 127.0.0.1.
+
+The world and its robots are nodes in this process (the multi-process runs are in
+test_remote.py); what is checked here is what goes over the wire.
+"""
+
+from __future__ import annotations
+
+import asyncio
+
+from mover import Node, NodeConfig, Team, free_port
+from sim_hw import World, WorldServer, random_obstacles, remote, serve_world
+from sim_hw._caller import frame_topics
+from sim_hw._process import serve
+
+
+def _configs() -> tuple[NodeConfig, NodeConfig]:
+    port = free_port()
+    return (
+        NodeConfig(listen=(f"tcp/127.0.0.1:{port}",)),
+        NodeConfig(connect=(f"tcp/127.0.0.1:{port}",)),
+    )
+
+
+async def _ticks(hw: object, n: int) -> list[float]:
+    out = []
+    for _ in range(n):
+        hw.drive.set_velocity(0.2, 0.3)  # type: ignore[attr-defined]
+        await hw.clock.tick()  # type: ignore[attr-defined]
+        out.append(hw.clock.now())  # type: ignore[attr-defined]
+    return out
+
+
+async def test_ticks_go_as_frames_after_the_first() -> None:
+    seed, peer = _configs()
+    team = Team.generate("frames")
+    server = WorldServer(World(random_obstacles((6.0, 6.0), 0)), expect=2)
+    async with (
+        Node("world", team, kind="world", config=seed) as world,
+        Node("a", team, config=peer) as a,
+        Node("b", team, config=peer) as b,
+    ):
+        serve_world(world, server)
+        await a.team.wait_for({"world", "a", "b"}, timeout=10)
+        ha, hb = await asyncio.gather(remote(a, "a"), remote(b, "b"))
+        times = await asyncio.wait_for(asyncio.gather(_ticks(ha, 20), _ticks(hb, 20)), 30)
+        assert times[0] == times[1] and len(set(times[0])) == 20  # in lock-step, tick by tick
+        # join and the first tick are calls; the 19 other ticks are one frame each way
+        assert a.stats["sent.call"] == 2 and b.stats["sent.call"] == 2
+        assert world.stats["recv.bc"] == 38
+        assert world.stats["sent.bc_frames"] == 19  # one frame of readings per tick, for both
+        await server.aclose()
+
+
+async def test_a_command_frame_only_counts_from_its_robot() -> None:
+    seed, peer = _configs()
+    team = Team.generate("frames")
+    server = WorldServer(World(random_obstacles((6.0, 6.0), 0)), expect=1)
+    async with (
+        Node("world", team, kind="world", config=seed) as world,
+        Node("a", team, config=peer) as a,
+        Node("mallory", team, config=peer) as mallory,
+    ):
+        serve_world(world, server)
+        await a.team.wait_for({"world", "a", "mallory"}, timeout=10)
+        ha = await remote(a, "a")
+        await ha.clock.tick()  # the first tick, by call
+        commands, _ = frame_topics("world")
+        # a member that speaks for another robot is not believed: the tick does not happen
+        mallory.broadcast_nowait(commands, ["a", 1, {"v": 1.0, "w": 0.0}], reliable=True)
+        mallory.broadcast_nowait(commands, ["a", "1", "junk"], reliable=True)
+        await asyncio.sleep(0.3)
+        assert server.world.tick == 1
+        assert server.world.robots["a"].v == 0.0
+        await asyncio.wait_for(_ticks(ha, 3), 10)
+        assert server.world.tick == 4
+        await server.aclose()
+
+
+async def test_without_frames_every_tick_is_a_call() -> None:
+    seed, peer = _configs()
+    team = Team.generate("frames")
+    server = WorldServer(World(random_obstacles((6.0, 6.0), 0)), expect=1)
+    async with (
+        Node("world", team, kind="world", config=seed) as world,
+        Node("a", team, config=peer) as a,
+    ):
+        serve(world, server, frames=False)
+        await a.team.wait_for({"world", "a"}, timeout=10)
+        ha = await remote(a, "a")
+        await asyncio.wait_for(_ticks(ha, 5), 10)
+        assert a.stats["sent.call"] == 6 and world.stats["recv.bc"] == 0
+        await server.aclose()
