@@ -24,10 +24,10 @@ import time
 from collections.abc import Awaitable, Callable, Mapping
 from typing import Any
 
+from sim_hw._lockstep import Command, Readings
+
 log = logging.getLogger("sim_hw.caller")
 
-Command = dict[str, Any]
-Readings = dict[str, Any]
 Exchange = Callable[[int, Command], Awaitable[Readings]]
 
 FRAME_WAIT = 1.0

@@ -38,8 +38,10 @@ from typing import Any, Generic, Protocol, TypeVar
 
 log = logging.getLogger("sim_hw.lockstep")
 
-Command = dict[str, Any]
-Readings = dict[str, Any]
+Command = Mapping[str, Any]
+"""A robot's command for a tick, as the world defines it (opaque to the door)."""
+Readings = Any
+"""A robot's readings after a tick, as the world defines them (opaque to the door)."""
 
 
 class RobotDropped(LookupError):
@@ -139,7 +141,7 @@ class LockstepDoor(Generic[S]):
         self.on_tick: list[Callable[[Mapping[str, Command]], None]] = []
         self._started = expect <= 0
         self._joins: dict[str, tuple[Any, asyncio.Future[dict[str, Any]]]] = {}
-        self._commands: dict[str, Command] = {}
+        self._commands: dict[str, dict[str, Any]] = {}
         self._waiters: dict[str, asyncio.Future[Readings]] = {}
         self._acted: set[str] = set()  # sequential: who has acted in this round
         self._deadline: asyncio.TimerHandle | None = None
@@ -196,7 +198,7 @@ class LockstepDoor(Generic[S]):
             done: asyncio.Future[Readings] = loop.create_future()
             done.set_result(self.stepper.readings(robot))
             return done
-        self._commands[robot] = command
+        self._commands[robot] = dict(command)
         if waiter is None:
             waiter = self._waiters[robot] = loop.create_future()
         if not self.lockstep:

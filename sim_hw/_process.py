@@ -42,7 +42,8 @@ def serve(node: Any, door: LockstepDoor[Any], *, frames: bool = True) -> None:
         return {**await door.join(robot, spec or None), "frames": offered}
 
     async def step(robot: str, tick: int, command: dict[str, Any]) -> dict[str, Any]:
-        return await door.step(robot, tick, command)
+        readings: dict[str, Any] = await door.step(robot, tick, command)
+        return readings
 
     async def leave(robot: str) -> None:
         await door.leave(robot)

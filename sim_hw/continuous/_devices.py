@@ -18,6 +18,8 @@ import pymunk
 from pymunk._chipmunk import ffi as _ffi
 from pymunk._chipmunk import lib as _lib
 
+from robots.hal import BumperSide
+
 from ._bodies import CAT_BOX, CAT_IMMOVABLE, CAT_MARKER, CAT_QUERY, CAT_ROBOT, CAT_WALL, SOLID
 
 _INFO = _ffi.new("cpSegmentQueryInfo *")
@@ -78,7 +80,7 @@ def sonar_ranges(
     return out
 
 
-def bumper_side(body: pymunk.Body) -> str | None:
+def bumper_side(body: pymunk.Body) -> BumperSide | None:
     """Which side of the ring touches something: ``front`` (±45°), ``left``, ``right``,
     ``back``. With several contacts, the one nearest the heading wins.
 

@@ -26,7 +26,8 @@ from robots.hal import (
 from sim_hw import _caller
 from sim_hw._caller import Exchange
 
-from ._world import TICK, Command, Readings
+from ._contract import Command, Readings
+from ._world import TICK
 
 PUSH_SPEED = 0.2
 """Forward speed (m/s) a push test asks for; the force bound decides whether it is reached."""

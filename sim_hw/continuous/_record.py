@@ -14,7 +14,7 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import IO, Any
 
-from ._world import Command, World
+from ._world import World
 
 
 class Recorder:
@@ -38,7 +38,7 @@ class Recorder:
         self._write(header)
         self._write({"type": "tick", **world.snapshot(), "commands": {}})
 
-    def __call__(self, world: World, commands: Mapping[str, Command]) -> None:
+    def __call__(self, world: World, commands: Mapping[str, Mapping[str, Any]]) -> None:
         if world.tick % self.every == 0:
             self._write({"type": "tick", **world.snapshot(), "commands": dict(commands)})
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 import logging
 import math
 import zlib
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, TypeVar
 
@@ -20,6 +20,7 @@ import pymunk
 from pymunk._chipmunk import lib as _lib
 
 from . import _bodies, _devices
+from ._contract import Command, Readings
 from ._spec import RobotSpec, WorldSpec
 
 _T = TypeVar("_T")
@@ -31,12 +32,6 @@ STEPS_PER_TICK = 6
 TICK = DT * STEPS_PER_TICK
 PUSH_REACH = 0.1
 """How far ahead of its rim a robot looks for the object it is asked to push (m)."""
-
-Command = dict[str, Any]
-"""``{"v": m/s, "w": rad/s, "push": N or None, "floor": [value, colour] or None,
-"led": str or None}``; missing keys keep their last value (``floor`` applies once)."""
-Readings = dict[str, Any]
-"""``{"tick", "t", "sonar", "bump", "odom", "cam", "loc", "floor", "push"}`` (see _hardware)."""
 
 
 @dataclass(slots=True)
@@ -59,7 +54,7 @@ class _Robot:
     led: str = ""
     push_force: float | None = None
     push: _Push | None = None
-    readings: Readings = field(default_factory=dict)
+    readings: Readings = field(init=False)
     angles: tuple[float, ...] = ()
 
 
@@ -171,7 +166,7 @@ class World:
         self._spawn_index += 1
         return (gap * (1 + k % per_row), gap * (1 + k // per_row), 0.0)
 
-    def set_command(self, robot_id: str, command: Command) -> None:
+    def set_command(self, robot_id: str, command: Command | Mapping[str, Any]) -> None:
         """Store a robot's command; it applies from the next tick on."""
         robot = self.robots[robot_id]
         spec = robot.parts.spec
@@ -255,9 +250,8 @@ class World:
             robot.odom, robot.last, pose, od.trans_noise, od.rot_noise, od.drift, robot.rng
         )
         robot.last = pose
-        readings: Readings = {"tick": self.tick, "t": self.time}
         sonar = spec.sonar
-        readings["sonar"] = (
+        ranges = (
             _devices.sonar_ranges(
                 self.space,
                 pose,
@@ -271,10 +265,8 @@ class World:
             if sonar
             else None
         )
-        readings["bump"] = _devices.bumper_side(body)
-        readings["odom"] = list(robot.odom)
         cam = spec.camera
-        readings["cam"] = (
+        sightings = (
             _devices.camera_sightings(
                 self.space,
                 pose,
@@ -287,10 +279,17 @@ class World:
             if cam
             else None
         )
-        readings["loc"] = list(pose) if spec.radio else None
-        readings["floor"] = list(self.floor.read(pose[0], pose[1]))
-        readings["push"] = self._push_reading(robot)
-        return readings
+        return {
+            "tick": self.tick,
+            "t": self.time,
+            "sonar": ranges,
+            "bump": _devices.bumper_side(body),
+            "odom": list(robot.odom),
+            "cam": sightings,
+            "loc": list(pose) if spec.radio else None,
+            "floor": list(self.floor.read(pose[0], pose[1])),
+            "push": self._push_reading(robot),
+        }
 
     def _push_reading(self, robot: _Robot) -> list[Any] | None:
         push = robot.push

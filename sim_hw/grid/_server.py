@@ -189,7 +189,7 @@ class GridStepper:
             return bool(self.target.any()) and not (self.target & ~self.seen).any()
         return False
 
-    def _apply(self, bot: _Bot, a: dict[str, Any]) -> None:
+    def _apply(self, bot: _Bot, a: Mapping[str, Any]) -> None:
         w, c = self.world, bot.cell
         if a.get("value") is not None:
             w.marks[c] = int(a["value"])
