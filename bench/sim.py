@@ -8,8 +8,14 @@ trivial bounce-off-walls controller) through the lock-step WorldServer and the i
 through the remote HAL over zenoh on 127.0.0.1, the world hosted in this process. Time is
 counted from the first tick to the last, so process start-up is left out.
 
+Each process figure is also given as a ratio against the world alone at the same size, from
+the same run: ``procs_efficiency_N = rtf_procs_N / rtf_world_N`` (what the processes and the
+network cost). The same 10 processes also run once with one call per tick instead of frames
+(the exchange before frames), as ``rtf_procs_10_calls`` and ``frames_speedup_10``.
+
 The last line is one JSON object: rtf_world_10, rtf_world_50, rtf_world_200, rtf_procs_10,
-rtf_procs_50 (null where not measured).
+rtf_procs_50, procs_efficiency_10, procs_efficiency_50, rtf_procs_10_calls, frames_speedup_10
+(null where not measured).
 """
 
 from __future__ import annotations
@@ -26,7 +32,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from sim_hw import World, WorldServer, WorldSpec, in_process, serve_world  # noqa: E402
+from sim_hw import World, WorldServer, WorldSpec, in_process  # noqa: E402
+from sim_hw._process import serve  # noqa: E402
 
 ROBOT = {"sonar": {"rays": 8, "max_range": 3.0}, "camera": False}
 
@@ -75,7 +82,7 @@ async def world_alone(n: int, seconds: float) -> float:
     return timer.rtf()
 
 
-async def processes(n: int, seconds: float) -> float:
+async def processes(n: int, seconds: float, *, frames: bool = True) -> float:
     """Real-time factor of n walker processes on the remote HAL."""
     from mover import Node, NodeConfig, Team, free_port
 
@@ -92,7 +99,7 @@ async def processes(n: int, seconds: float) -> float:
     config = NodeConfig(listen=(f"tcp/127.0.0.1:{port}",))
     ticks = round(seconds / 0.1)
     async with Node("world", team=team, kind="world", config=config) as node:
-        serve_world(node, server)
+        serve(node, server, frames=frames)
         procs = [
             await asyncio.create_subprocess_exec(
                 sys.executable,
@@ -132,19 +139,29 @@ async def processes(n: int, seconds: float) -> float:
 async def main(args: argparse.Namespace) -> dict[str, float | None]:
     scale = 0.3 if args.quick else 1.0
     out: dict[str, float | None] = {}
+    world: dict[int, float] = {}
     for n, seconds in ((10, 60.0), (50, 30.0), (200, 10.0)):
-        rtf = await world_alone(n, seconds * scale)
+        rtf = world[n] = await world_alone(n, seconds * scale)
         out[f"rtf_world_{n}"] = round(rtf, 1)
         print(f"world alone, {n:3d} robots: {rtf:7.1f}x real time", flush=True)
     for n, seconds in ((10, 30.0), (50, 10.0)):
         key = f"rtf_procs_{n}"
         if args.no_procs:
-            out[key] = None
+            out[key] = out[f"procs_efficiency_{n}"] = None
             print(f"{n} robot processes: not measured (--no-procs)")
             continue
         rtf = await processes(n, seconds * scale)
         out[key] = round(rtf, 1)
-        print(f"{n:3d} robot processes: {rtf:7.1f}x real time", flush=True)
+        eff = rtf / world[n]
+        out[f"procs_efficiency_{n}"] = round(eff, 3)
+        print(f"{n:3d} robot processes: {rtf:7.1f}x real time ({eff:.3f} of the world alone)")
+    out["rtf_procs_10_calls"] = out["frames_speedup_10"] = None
+    if not args.no_procs:
+        calls = await processes(10, 30.0 * scale, frames=False)
+        out["rtf_procs_10_calls"] = round(calls, 1)
+        assert out["rtf_procs_10"] is not None
+        out["frames_speedup_10"] = round(float(out["rtf_procs_10"]) / calls, 2)
+        print(f" 10 robot processes, a call per tick: {calls:7.1f}x real time", flush=True)
     return out
 
 

@@ -97,8 +97,8 @@ class Node:
         self._server = RpcServer(self)
         self._client = RpcClient(self)
         self._subs: dict[str, tuple[Any, list[Subscription]]] = {}
-        self._publishers: dict[tuple[str, bool], Any] = {}
-        self._outbox: dict[tuple[str, bool], list[bytes]] = {}
+        self._publishers: dict[tuple[str, bool, bool], Any] = {}
+        self._outbox: dict[tuple[str, bool, bool], list[bytes]] = {}
         self._flush_scheduled = False
         self._declared: list[Any] = []
         self._session: Any = None
@@ -222,18 +222,32 @@ class Node:
     # -- broadcasts -----------------------------------------------------------------------------
 
     async def broadcast(
-        self, topic: str, data: Any, *, range: float | None = None, reliable: bool = False
+        self,
+        topic: str,
+        data: Any,
+        *,
+        range: float | None = None,
+        reliable: bool = False,
+        express: bool = False,
     ) -> None:
         """Send ``data`` on ``topic`` to members within ``range`` metres (see the nowait form)."""
-        self.broadcast_nowait(topic, data, range=range, reliable=reliable)
+        self.broadcast_nowait(topic, data, range=range, reliable=reliable, express=express)
 
     def broadcast_nowait(
-        self, topic: str, data: Any, *, range: float | None = None, reliable: bool = False
+        self,
+        topic: str,
+        data: Any,
+        *,
+        range: float | None = None,
+        reliable: bool = False,
+        express: bool = False,
     ) -> None:
         """Send ``data`` on ``topic`` to the members within ``range`` metres of this node now.
 
         ``range=None`` reaches the whole team. ``reliable=True`` blocks rather than drops when
-        the network is congested (default: drop, as a radio would). Broadcasts made in one
+        the network is congested (default: drop, as a radio would). ``express=True`` sends the
+        frame at once rather than letting zenoh batch it with others for up to a millisecond or
+        so (for messages on a latency-bound path, such as a lock-step tick). Broadcasts made in one
         turn of the event loop leave together, at the end of that turn, as one signed frame per
         topic (so a burst costs one signature and one zenoh message); each keeps the position
         this node had when it was made. Raises PayloadTooLarge at once for oversized data.
@@ -245,10 +259,10 @@ class Node:
         item = pack([data, list(where) if where else None, range])
         if len(item) > self._sealer.max_size // 2:
             raise PayloadTooLarge(f"broadcast of {len(item)} bytes is over the limit")
-        box = self._outbox.get((topic, reliable))
+        box = self._outbox.get((topic, reliable, express))
         if box is None:
             _keys.check_topic(topic)
-            box = self._outbox[(topic, reliable)] = []
+            box = self._outbox[(topic, reliable, express)] = []
         box.append(item)
         if not self._flush_scheduled:
             self._flush_scheduled = True
@@ -260,8 +274,8 @@ class Node:
             return
         outbox, self._outbox = self._outbox, {}
         limit = self._sealer.max_size // 2
-        for (topic, reliable), items in outbox.items():
-            pub = self._publisher(topic, reliable)
+        for (topic, reliable, express), items in outbox.items():
+            pub = self._publisher(topic, reliable, express)
             start = 0
             while start < len(items):
                 end, size = start, 0
@@ -276,14 +290,16 @@ class Node:
                 start = end
             self.stats["sent.bc"] += len(items)
 
-    def _publisher(self, topic: str, reliable: bool) -> Any:
-        pub = self._publishers.get((topic, reliable))
+    def _publisher(self, topic: str, reliable: bool, express: bool) -> Any:
+        pub = self._publishers.get((topic, reliable, express))
         if pub is None:
             congestion = zenoh.CongestionControl.BLOCK if reliable else zenoh.CongestionControl.DROP
             pub = self._session.declare_publisher(
-                _keys.broadcast(self.team_name, topic), congestion_control=congestion
+                _keys.broadcast(self.team_name, topic),
+                congestion_control=congestion,
+                express=express,
             )
-            self._publishers[(topic, reliable)] = pub
+            self._publishers[(topic, reliable, express)] = pub
         return pub
 
     def subscribe(self, topic: str, *, maxlen: int = 100_000) -> Subscription:

@@ -108,7 +108,7 @@ async def remote(
     async def exchange(tick: int, command: Command) -> Readings:
         nonlocal warm
         if warm:
-            node.broadcast_nowait(commands, [robot_id, tick, command], reliable=True)
+            node.broadcast_nowait(commands, [robot_id, tick, command], reliable=True, express=True)
             got = await _own_entry(frames, world, robot_id, tick)
             if got is not None:
                 return got

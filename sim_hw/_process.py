@@ -107,7 +107,7 @@ class _TickFrames:
     def send(self, entries: dict[str, bytes]) -> None:
         frame = {"tick": self.door.stepper.tick, "readings": entries}
         try:
-            self.node.broadcast_nowait(self.topic, frame, reliable=True)
+            self.node.broadcast_nowait(self.topic, frame, reliable=True, express=True)
         except MoverError as exc:  # too large, or the node closing: robots will ask by call
             log.warning("tick frame not sent: %s", exc)
 
