@@ -3,7 +3,7 @@
 Zenoh calls Python callbacks on its own threads. Every callback mover declares is made here:
 it appends ``(handler, item)`` to a deque and, only when no wake-up is pending already, schedules
 one with ``loop.call_soon_threadsafe``. The loop then drains the deque in a batch, so a burst of
-messages costs one loop hop, not one per message (ZENOH-NOTES: ~60-85 k msgs/s with a hop per
+messages costs one loop hop, not one per message (docs/transport.md: ~60-85 k msgs/s with a hop per
 message, ~0.6 M with coalescing). A callback never blocks and never calls zenoh; the handlers run
 on the loop, where every exception is logged and swallowed so that no bad message reaches the
 loop's exception handler.

@@ -131,7 +131,7 @@ class NodeConfig:
             "scouting/multicast/enabled": self.multicast,
             "transport/link/tx/lease": self.lease_ms,
             "transport/link/tx/keep_alive": self.keep_alive,
-            # Retry quickly after a peer or router restart (ZENOH-NOTES).
+            # Retry quickly after a peer or router restart (docs/transport.md).
             "connect/retry": {"period_init_ms": 100, "period_max_ms": 500},
         }
         settings.update(self.overrides)

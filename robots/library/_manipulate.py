@@ -2,7 +2,7 @@
 Brown and Jennings [BJ95]): move an object along a path given relative to where it is, the
 object pinned between robots at its rear face.
 
-As measured in PYMUNK-NOTES.md, the pusher stands at one rear corner and holds a constant
+As measured in docs/physics.md, the pusher stands at one rear corner and holds a constant
 speed (0.3 m/s); the steerer stands at the other and adjusts its speed by up to ±0.2 m/s to
 turn the object back onto the path; either alone only pivots it. Neither talks to the other:
 each keeps the object where its camera first saw it (so it stays square to the face), and the

@@ -126,7 +126,7 @@ def moved(displacement: float, threshold: float = 0.005) -> bool:
     """Recognition (section 4.1): did the pushed object move by more than ``threshold`` m?
 
     Walls and immovable objects read exactly 0; the demo world's 2-robot box does not slide
-    under one robot but pivots by centimetres when pushed off-centre (PYMUNK-NOTES.md).
+    under one robot but pivots by centimetres when pushed off-centre (docs/physics.md).
     """
     return displacement > threshold
 
@@ -231,7 +231,7 @@ async def movable(
     (off-centre, and in case the contact was not straight ahead). Walls and immovable
     objects never move (they read exactly 0 m); a box one robot can slide moves by
     centimetres; the demo's 2-robot box reads ~1e-8 m under a square push and pivots only
-    under a near-corner push of more than ~52 N (PYMUNK-NOTES.md), so at 50 N it is not
+    under a near-corner push of more than ~52 N (docs/physics.md), so at 50 N it is not
     "movable" by one robot — use :func:`sees` for it. Teammates (seen by the camera) are never
     movable. The motors are stopped on the way out.
     """

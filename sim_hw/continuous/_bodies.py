@@ -1,6 +1,6 @@
 """Pymunk bodies for the world's things: walls, obstacles, boxes, markers and robots.
 
-Robots follow the tank pattern of pymunk's examples (PYMUNK-NOTES.md): a dynamic disc pulled by
+Robots follow the tank pattern of pymunk's examples (docs/physics.md): a dynamic disc pulled by
 a kinematic control body through a PivotJoint and a GearJoint with ``max_bias = 0``; the joints'
 ``max_force`` is the drive force, so a robot pushes with a bounded force whatever the time step.
 Boxes get floor friction from a 3×3 grid of pivot joints to the static body, which couples
@@ -26,7 +26,7 @@ CAT_MARKER = 0b10000
 CAT_QUERY = 0b100000
 SOLID = CAT_WALL | CAT_IMMOVABLE | CAT_BOX | CAT_ROBOT
 GRID_FRICTION_SCALE = 1.04
-"""A 3×3 friction grid reads ~3.8 % low (PYMUNK-NOTES.md); each point is scaled up by this."""
+"""A 3×3 friction grid reads ~3.8 % low (docs/physics.md); each point is scaled up by this."""
 WALL_RADIUS = 0.05
 SURFACE_FRICTION = 0.5
 

@@ -57,7 +57,7 @@ def sonar_ranges(
 ) -> list[float]:
     """Range from the rim along each ray to the first solid shape, ``max_range`` if none.
 
-    Calls chipmunk's segment query directly (PYMUNK-NOTES.md: ~1 µs a ray instead of ~4 µs
+    Calls chipmunk's segment query directly (docs/physics.md: ~1 µs a ray instead of ~4 µs
     through ``Space.segment_query_first``, which builds Python objects for every hit).
     """
     x, y, heading = pose

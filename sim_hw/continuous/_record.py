@@ -3,7 +3,7 @@
 A recording starts with a header line (the arena: size, obstacles, objects, markers, seed) and
 has one line per recorded tick: the true poses of robots and boxes and the commands applied.
 Commands make a recording a replay script too: re-running the world from the same seed with the
-logged commands reproduces it (PYMUNK-NOTES.md, determinism).
+logged commands reproduces it (docs/physics.md, determinism).
 """
 
 from __future__ import annotations
