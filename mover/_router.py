@@ -8,7 +8,7 @@ access-control list that lets only the team's certificates touch ``mover/<team>/
 uses its file through ``MOVER_ZENOH_CONFIG``; the team key (envelope signatures) still applies on
 top, so a member whose certificate leaks still cannot forge team messages.
 
-Note (docs/transport.md): an ACL applies only in the node that has it. Robots behind the router should
+An ACL applies only in the node that has it (docs/transport.md). Robots behind the router should
 run as clients (``MOVER_MODE=client``) and listen on nothing, so that no outsider can link to them
 directly and bypass the router.
 """
