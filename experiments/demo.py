@@ -11,22 +11,22 @@ from __future__ import annotations
 
 import argparse
 import asyncio
-import contextlib
 import json
 import math
 import os
 import signal
 import sys
 import time
-import tomllib
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from mover import PROGRESS_TOPIC, Node, NodeConfig, Team, free_port, launch
+from mover.cli import UsageError
+from sim_hw import STATE_TOPIC, WorldFileError, load_world
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_WORLD = ROOT / "worlds" / "search_and_rescue.toml"
-STATE_TOPIC = "world/state"
 
 
 def register(sub: Any) -> None:
@@ -45,36 +45,59 @@ def register(sub: Any) -> None:
     p.set_defaults(func=run)
 
 
-def run(args: argparse.Namespace) -> int:
-    from mover.cli import UsageError
+@dataclass(frozen=True)
+class DemoSettings:
+    """A demo run: the program and its arguments, the world file and its robots, the goal
+    (its first target, for the report), where to write, the world's seed, the time allowed."""
 
+    program: str
+    world: Path
+    robots: tuple[str, ...]
+    program_args: dict[str, Any] = field(default_factory=dict)
+    goal: tuple[float, float] | None = None
+    out: Path = Path("out/demo")
+    seed: int = 1
+    timeout: float = 120.0
+
+
+def settings(args: argparse.Namespace) -> DemoSettings:
+    """The settings the command line asks for, the world file read; raises
+    :class:`~mover.cli.UsageError` naming what is wrong."""
     world = Path(args.world)
     try:
-        data = tomllib.loads(world.read_text())
-    except (OSError, tomllib.TOMLDecodeError) as exc:
-        raise UsageError(f"world file {world}: {exc}") from None
-    robots = [r["id"] for r in data.get("robots", []) if isinstance(r, dict) and "id" in r]
-    if not robots:
+        spec = load_world(world)
+    except WorldFileError as exc:
+        raise UsageError(f"world file {exc}") from None
+    if not spec.robots:
         raise UsageError(f"world file {world}: no [[robots]] with an id")
     try:
         program_args = json.loads(args.args)
     except json.JSONDecodeError as exc:
         raise UsageError(f"--args is not JSON: {exc.msg}") from None
-    goals = [t["center"] for t in data.get("targets", []) if isinstance(t, dict) and "center" in t]
-    goal = (float(goals[0][0]), float(goals[0][1])) if goals else None
-    return asyncio.run(demo(args, world, robots, program_args, goal))
+    goals = [m.center for m in spec.markers if m.kind == "target"]
+    return DemoSettings(
+        program=args.program,
+        world=world,
+        robots=tuple(spec.robots),
+        program_args=program_args,
+        goal=(float(goals[0][0]), float(goals[0][1])) if goals else None,
+        out=Path(args.out),
+        seed=args.seed,
+        timeout=args.timeout,
+    )
 
 
-async def demo(
-    args: argparse.Namespace,
-    world: Path,
-    robots: list[str],
-    program_args: dict[str, Any],
-    goal: tuple[float, float] | None = None,
-) -> int:
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)  # noqa: ASYNC240 (once, before anything starts)
-    recording, png = out / "run.jsonl", out / "trajectories.png"
+def run(args: argparse.Namespace) -> int:
+    """Run the demo the command line asks for."""
+    return asyncio.run(demo(settings(args)))
+
+
+async def demo(s: DemoSettings) -> int:
+    """Start the world and robot processes, run the program, report; 0 if every member ended
+    without error."""
+    s.out.mkdir(parents=True, exist_ok=True)  # once, before anything starts
+    recording, png = s.out / "run.jsonl", s.out / "trajectories.png"
+    robots = list(s.robots)
     team = Team.generate("demo")
     port = free_port()
     env = {
@@ -86,11 +109,12 @@ async def demo(
     }
     wall0 = time.monotonic()
     print(
-        f"mover demo: {args.program} with {', '.join(robots)} in {world.name} "
-        f"(team key is fresh; zenoh on 127.0.0.1:{port}; seed {args.seed})",
+        f"mover demo: {s.program} with {', '.join(robots)} in {s.world.name} "
+        f"(team key is fresh; zenoh on 127.0.0.1:{port}; seed {s.seed})",
         flush=True,
     )
     procs: list[asyncio.subprocess.Process] = []
+    seen = _Seen(wall0)
     try:
         async with Node(
             "demo",
@@ -101,29 +125,10 @@ async def demo(
         ) as node:
             states = node.subscribe(STATE_TOPIC)
             progress = node.subscribe(f"{PROGRESS_TOPIC}/demo")
-            procs.append(
-                await _spawn(
-                    [
-                        sys.executable,
-                        "-m",
-                        "mover._cli",
-                        "world",
-                        str(world),
-                        "--lockstep",
-                        "--expect",
-                        str(len(robots)),
-                        "--seed",
-                        str(args.seed),
-                        "--timeout",
-                        "5",
-                        "--record",
-                        str(recording),
-                        "--state-rate",
-                        "5",
-                    ],
-                    env,
-                )
-            )
+            world = [sys.executable, "-m", "mover._cli", "world", str(s.world), "--lockstep"]
+            world += ["--expect", str(len(robots)), "--seed", str(s.seed), "--timeout", "5"]
+            world += ["--record", str(recording), "--state-rate", "5"]
+            procs.append(await _spawn(world, env))
             for name in robots:
                 procs.append(await _spawn([sys.executable, "-m", "robots", "--name", name], env))
             await node.team.wait_for(["world", *robots], timeout=60)
@@ -131,22 +136,22 @@ async def demo(
                 f"[{time.monotonic() - wall0:5.1f}s] world and {len(robots)} robot processes up",
                 flush=True,
             )
-            watcher = asyncio.create_task(_watch(progress, states, wall0))
+            watcher = asyncio.create_task(seen.watch(progress, states))
             try:
                 outcomes = await asyncio.wait_for(
-                    launch(node, args.program, robots, program_args, run="demo"), args.timeout
+                    launch(node, s.program, robots, s.program_args, run="demo"), s.timeout
                 )
             finally:
                 await asyncio.sleep(0.2)
                 watcher.cancel()
-                phases, boxes = await _gather(watcher)
+                await asyncio.wait([watcher])  # ended; its cancellation is not ours to raise
     except TimeoutError:
-        print(f"mover demo: no result within {args.timeout} s", file=sys.stderr)
+        print(f"mover demo: no result within {s.timeout} s", file=sys.stderr)
         return 1
     finally:
         await _stop(procs)
     wall = time.monotonic() - wall0
-    ok = _report(outcomes, phases, boxes, wall, goal)
+    ok = _report(outcomes, seen.phases, seen.boxes, wall, s.goal)
     replay = await asyncio.create_subprocess_exec(
         sys.executable,
         "-m",
@@ -181,40 +186,37 @@ async def _stop(procs: list[asyncio.subprocess.Process]) -> None:
             await p.wait()
 
 
-_seen: dict[str, Any] = {}
+@dataclass
+class _Seen:
+    """What the demo watches while the program runs: the members' progress reports (printed,
+    and the first report of each phase timed) and the world's snapshots (the boxes' tracks)."""
 
+    wall0: float
+    phases: dict[str, list[float]] = field(default_factory=dict)  # phase -> [wall s, sim s]
+    boxes: dict[str, list[list[float]]] = field(default_factory=dict)
+    sim: float = 0.0
 
-async def _watch(progress: Any, states: Any, wall0: float) -> None:
-    phases: dict[str, list[float]] = {}
-    boxes: dict[str, list[list[float]]] = {}
-    sim = [0.0]
-    _seen.update(phases=phases, boxes=boxes)
+    async def watch(self, progress: Any, states: Any) -> None:
+        """Follow both subscriptions until cancelled."""
+        async with asyncio.TaskGroup() as tg:
+            tg.create_task(self._track_states(states))
+            await self._track_progress(progress)
 
-    async def track_states() -> None:
+    async def _track_states(self, states: Any) -> None:
         async for m in states:
-            sim[0] = float(m.data.get("t", 0.0))
+            self.sim = float(m.data.get("t", 0.0))
             for bid, pose in m.data.get("boxes", {}).items():
-                boxes.setdefault(bid, []).append(list(pose[:2]))
+                self.boxes.setdefault(bid, []).append(list(pose[:2]))
 
-    tracker = asyncio.create_task(track_states())
-    try:
+    async def _track_progress(self, progress: Any) -> None:
         async for m in progress:
             data = dict(m.data)
             member, phase = data.pop("member", "?"), data.pop("phase", "?")
-            now = time.monotonic() - wall0
-            phases.setdefault(phase, [now, sim[0]])
+            now = time.monotonic() - self.wall0
+            self.phases.setdefault(phase, [now, self.sim])
             extra = " ".join(f"{k}={_fmt(v)}" for k, v in data.items())
-            print(
-                f"[{now:5.1f}s | sim {sim[0]:6.1f}s] {member}: {phase} {extra}".rstrip(), flush=True
-            )
-    finally:
-        tracker.cancel()
-
-
-async def _gather(watcher: asyncio.Task[None]) -> tuple[dict[str, Any], dict[str, Any]]:
-    with contextlib.suppress(asyncio.CancelledError):
-        await watcher
-    return _seen.get("phases", {}), _seen.get("boxes", {})
+            line = f"[{now:5.1f}s | sim {self.sim:6.1f}s] {member}: {phase} {extra}"
+            print(line.rstrip(), flush=True)
 
 
 def _fmt(v: Any) -> str:

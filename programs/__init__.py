@@ -1,15 +1,22 @@
-"""Coordination programs (they read like the papers) and experiment runners.
+"""Coordination programs: they read like the papers and use only ``mover`` and ``robots``.
 
-``PROGRAMS`` maps the name a program is started by to the installed coroutine function that
-every member of the team runs (``async def program(robot, team, **args)``).
+A program is ``async def program(robot, team, **args)``: every member of the team runs it,
+started by name with data arguments. The names are the ``mover.programs`` entry points
+(pyproject.toml), the one list of them; :func:`installed` loads them as a robot process does.
+The experiment runners that drive these programs' behaviours in-process live in
+``experiments/``, which may import the simulated hardware; nothing here does.
 """
 
-from .follow_trainer import follow_trainer
-from .search_and_rescue import search_and_rescue
+from __future__ import annotations
 
-PROGRAMS = {
-    "search_and_rescue": search_and_rescue,
-    "follow_trainer": follow_trainer,
-}
+from collections.abc import Callable
+from typing import Any
 
-__all__ = ["PROGRAMS", "follow_trainer", "search_and_rescue"]
+__all__ = ["installed"]
+
+
+def installed() -> dict[str, Callable[..., Any]]:
+    """The installed programs by the name they are started by (``mover.programs``), loaded."""
+    from robots.process import installed_programs
+
+    return installed_programs()

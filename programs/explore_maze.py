@@ -1,7 +1,9 @@
 """Distributed maze exploration as robot processes (Linardakis et al., CU-LVP and baselines).
 
 Every member runs the same :class:`~robots.explore.ExplorerAgent` the in-process runner
-(``programs/maze_experiment.py``) uses, one per process. Per round a robot
+(``experiments.maze``) uses, one per process, and the same round,
+:func:`~robots.explore.explore_rounds`; this program is its driver over the grid HAL and
+mover's range-limited broadcast. Per round a robot
 
 1. reads its star sensor (view rays) and records the cells on its own map, at the cell its
    odometry says it is on (its start cell, given at launch, plus the cells it has moved);
@@ -31,7 +33,18 @@ from typing import Any
 import numpy as np
 
 from mover import pack
-from robots.explore import EXCHANGES, FREE, OBSTACLE, STAY, UNKNOWN, ExplorerAgent, make_policy
+from robots.explore import (
+    EXCHANGES,
+    FREE,
+    OBSTACLE,
+    UNKNOWN,
+    Exchange,
+    ExplorerAgent,
+    Sense,
+    View,
+    explore_rounds,
+    make_policy,
+)
 from robots.grid_hal import GridHardware, direction_of
 
 from .foraging import member_index, start_round
@@ -41,11 +54,11 @@ TOPIC = "maze"
 HEAR_TIMEOUT = 10.0
 
 
-Exchange = tuple[int, int]  # (round, exchange within the round)
+Key = tuple[int, int]  # (round, exchange within the round)
 
 
 async def _hear(
-    robot: Any, sub: Any, inbox: dict[Exchange, dict[str, Any]], round: Exchange, expected: set[str]
+    robot: Any, sub: Any, inbox: dict[Key, dict[str, Any]], round: Key, expected: set[str]
 ) -> dict[str, dict[str, Any]]:
     """The broadcasts of exchange ``round`` from ``expected``; later ones are kept for theirs."""
     node = robot.node
@@ -61,7 +74,7 @@ async def _hear(
             msg = await sub.get(timeout=0.25)
         except TimeoutError:
             continue
-        k = (int(msg.data["round"]), int(msg.data.get("exchange", 0)))
+        k = (int(msg.data["round"]), int(msg.data["exchange"]))
         if k == round:
             got[msg.sender] = msg.data["agent"]
         elif k > round:
@@ -98,8 +111,6 @@ async def explore_maze(
     """
     if not starts or not shape:
         raise ValueError("starts and shape are needed (launch data: the team's start cells)")
-    if exchanges < 1:
-        raise ValueError(f"exchanges must be at least 1, not {exchanges}")
     hw: GridHardware = robot.hw
     n = len(team.members)
     if len(starts) != n:
@@ -115,7 +126,8 @@ async def explore_maze(
     reach = radio.range + 2  # the medium decides who hears; moving one cell must not lose it
     topic = f"{TOPIC}/{team.run}"
     rounds = moves = sent = 0
-    inbox: dict[Exchange, dict[str, Any]] = {}
+    inbox: dict[Key, dict[str, Any]] = {}
+    plan = explore_rounds(agent, exchanges)
 
     async def send(data: dict[str, Any]) -> int:
         """Broadcast to the members in radio range; the bytes of the agent's message."""
@@ -126,29 +138,35 @@ async def explore_maze(
 
     # subscribed before the start step: no member broadcasts before every one listens
     async with robot.node.subscribe(topic) as sub, hw.clock.owned(at=await start_round(hw, team)):
+        hearers: set[str] = set()
+        now = 0
+        request = next(plan)
         while True:
-            dr, dc, _ = hw.odometry.pose()
-            r, c = cells[i][0] + int(dr), cells[i][1] + int(dc)
-            agent.observe(
-                seen_cells=[(r + s.d_row, c + s.d_col, int(s.obstacle)) for s in hw.senses.rays()],
-                position=(r, c),
-            )
-            if hw.clock.ended() or (max_rounds and rounds >= max_rounds):
-                break
-            now = hw.clock.now()
-            sent += await send({"round": now, "agent": agent.outgoing_message()})
-            hearers = set(radio.in_range())
-            heard = await _hear(robot, sub, inbox, (now, 0), hearers)
-            agent.observe(heard_messages=sorted(heard.values(), key=lambda m: m["id"]))
-            for k in range(1, exchanges if hearers else 1):
-                sent += await send({"round": now, "exchange": k, "agent": agent.relay_message()})
+            reply: Any = None
+            if isinstance(request, Sense):
+                dr, dc, _ = hw.odometry.pose()
+                r, c = cells[i][0] + int(dr), cells[i][1] + int(dc)
+                seen = [(r + s.d_row, c + s.d_col, int(s.obstacle)) for s in hw.senses.rays()]
+                over = hw.clock.ended() or bool(max_rounds and rounds >= max_rounds)
+                reply = View(seen, (r, c), over)
+            elif isinstance(request, Exchange):
+                k = request.index
+                if k == 0:
+                    now = hw.clock.now()
+                sent += await send({"round": now, "exchange": k, "agent": request.message})
+                if k == 0:
+                    hearers = set(radio.in_range())
                 heard = await _hear(robot, sub, inbox, (now, k), hearers)
-                agent.hear_relay(sorted(heard.values(), key=lambda m: m["id"]))
-            move = agent.decide()
-            hw.drive.move(direction_of(*move) if move != STAY else None)
-            await hw.clock.tick()
-            moves += hw.drive.moved()
-            rounds += 1
+                reply = sorted(heard.values(), key=lambda m: m["id"])
+            else:
+                hw.drive.move(direction_of(*request.move))
+                await hw.clock.tick()
+                moves += hw.drive.moved()
+                rounds += 1
+            try:
+                request = plan.send(reply)
+            except StopIteration:
+                break
     if snapshot_dir:
         path = Path(snapshot_dir) / f"{robot.id}.txt"
         path.parent.mkdir(parents=True, exist_ok=True)

@@ -2,9 +2,11 @@
 
 Each agent is an :class:`ExplorerAgent` (its own map, region, and what it heard) with a
 :class:`Policy` that turns that knowledge into a move. The same objects run in-process
-(``programs/maze_experiment.py``) and, one per process, on a grid world:
+(``experiments.maze``) and, one per process, on a grid world:
 ``observe(seen_cells, heard_messages)``, ``outgoing_message()`` (msgpack-able), the relays
-``relay_message()`` / ``hear_relay()`` (see :data:`EXCHANGES`), ``decide()``.
+``relay_message()`` / ``hear_relay()`` (see :data:`EXCHANGES`), ``decide()``. Both run them
+with the same round, :func:`explore_rounds` (sense, exchange and relay, decide, move), which
+asks its driver for a :class:`Sense`, an :class:`Exchange` or a :class:`Drive` at a time.
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ from ._agent import EXCHANGES, STAY, ExplorerAgent, Move, Peer, Policy
 from ._frontier import CULVP, CostUtilityBSO, CostUtilityJGR, CostUtilityMNM, NearestFrontier
 from ._grid import AGENT, FREE, OBSTACLE, UNKNOWN
 from ._hedac import Hedac, attracting_field
+from ._rounds import Drive, Exchange, Request, Rounds, Sense, View, explore_rounds
 from ._sensing import unexplored_in_view
 from ._voronoi import voronoi_partition
 
@@ -67,13 +70,20 @@ __all__ = [
     "CostUtilityBSO",
     "CostUtilityJGR",
     "CostUtilityMNM",
+    "Drive",
+    "Exchange",
     "ExplorerAgent",
     "Hedac",
     "Move",
     "NearestFrontier",
     "Peer",
     "Policy",
+    "Request",
+    "Rounds",
+    "Sense",
+    "View",
     "attracting_field",
+    "explore_rounds",
     "make_policy",
     "make_team",
     "unexplored_in_view",

@@ -1,6 +1,6 @@
 """Maze worlds for distributed exploration: generation, files, the star sensor, moves.
 
-Linardakis et al. (papers/linardakis-cu-lvp-maze-exploration.txt), section IV-A: a
+Linardakis et al., CU-LVP maze exploration, section IV-A: a
 recursive-backtracker maze whose free cells also open their four neighbours with probability
 ``1 - obstacle_probability``, with a wall on the border. A "30x30" maze is a 31x31 grid
 (15x15 backtracker cells, corridors and walls one cell wide), i.e. 29x29 inner cells.
@@ -11,7 +11,8 @@ cleared (so that no wall block is left that no agent can see, and no agent is bo
 border is then walled again.
 
 Cells: 0 free, 1 obstacle. Positions are ``(row, col)``. This module is the simulated hardware
-side: the ground truth, the range-2 star sensor (section III-A) and the moves a world allows.
+side: the ground truth, the range-2 star sensor (section III-A), the radio's reach (III-B);
+the agents' cells and moves are an exclusive :class:`~sim_hw.grid.GridWorld` (:func:`MazeWorld`).
 """
 
 from __future__ import annotations
@@ -25,9 +26,8 @@ import numpy as np
 
 from robots.grid_hal import FREE, OBSTACLE
 from robots.grid_hal import STAR_RAYS as RAYS
-
-#: 4-connected moves an agent may make, plus staying put.
-MOVES: tuple[tuple[int, int], ...] = ((0, 0), (-1, 0), (1, 0), (0, -1), (0, 1))
+from sim_hw.grid._grid import Grid
+from sim_hw.grid._world import GridWorld
 
 _STEPS = ((0, 1), (1, 0), (0, -1), (-1, 0))
 
@@ -171,49 +171,14 @@ def broadcast_range(shape: tuple[int, int]) -> int:
     return int(0.25 * max(shape))
 
 
-def in_range(a: tuple[int, int], b: tuple[int, int], reach: int) -> bool:
-    """Whether two agents can hear each other: Manhattan distance within ``reach``, as the
-    reference code measures it on the 4-connected grid."""
-    return abs(a[0] - b[0]) + abs(a[1] - b[1]) <= reach
-
-
-class MazeWorld:
-    """Ground truth plus the agents' cells; applies moves in the order they are given."""
-
-    def __init__(self, maze: Maze, n_agents: int) -> None:
-        if n_agents > len(maze.starts):
-            raise ValueError(f"{n_agents} agents but the maze has {len(maze.starts)} starts")
-        self.grid = maze.grid
-        self.positions = [(int(p[0]), int(p[1])) for p in maze.starts[:n_agents]]
-        for p in self.positions:
-            if self.grid[p] != FREE:
-                raise ValueError(f"start {p} is not a free cell")
-        self._occupied = set(self.positions)
-        self.reach = broadcast_range(maze.shape)
-
-    def sense(self, i: int, reach: int = 2) -> list[tuple[int, int, int]]:
-        """The star sensor of agent ``i``."""
-        return star_view(self.grid, self.positions[i], reach)
-
-    def move(self, i: int, step: tuple[int, int]) -> bool:
-        """Move agent ``i`` one cell (4-connected) unless into an obstacle or occupied cell."""
-        if tuple(step) not in MOVES:
-            raise ValueError(f"illegal move {step!r}")
-        if step == (0, 0):
-            return False
-        r, c = self.positions[i]
-        target = (r + step[0], c + step[1])
-        if self.grid[target] != FREE or target in self._occupied:
-            return False
-        self._occupied.discard((r, c))
-        self._occupied.add(target)
-        self.positions[i] = target
-        return True
-
-    def neighbours(self, i: int) -> list[int]:
-        """Agents that hear agent ``i``'s broadcast this round (within range, not ``i``)."""
-        p = self.positions[i]
-        return [j for j, q in enumerate(self.positions) if j != i and in_range(p, q, self.reach)]
+def MazeWorld(maze: Maze, n_agents: int) -> GridWorld:  # the name the public face gives it
+    """The grid world of ``maze`` with ``n_agents`` on its first starts: exclusive cells (a move
+    into an occupied cell fails, section III-A), the first start standing in for the base.
+    Who hears whom: ``world.neighbours(i, broadcast_range(maze.shape), "manhattan")``."""
+    if not 0 < n_agents <= len(maze.starts):
+        raise ValueError(f"{n_agents} agents but the maze has {len(maze.starts)} starts")
+    starts = [(int(r), int(c)) for r, c in maze.starts[:n_agents]]
+    return GridWorld(Grid(maze.grid == OBSTACLE), starts[0], starts=starts, exclusive=True)
 
 
 def save_maze(path: str | Path, maze: Maze) -> None:

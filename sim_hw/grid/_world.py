@@ -10,6 +10,11 @@ asynchronous). With a pheromone layer, diffusion and evaporation follow once all
 The mutable layers are flat Python lists (fast scalar access in the agents' loop) and the whole
 state round-trips through :meth:`GridWorld.to_dict` (msgpack-able) so that a world process can
 serve it later; :meth:`marks_array` and friends give numpy views for analysis and plots.
+
+An ``exclusive`` world is the maze papers' (Linardakis et al., section III-A): no two agents on
+one cell, a move into an occupied cell fails and the agent stays (:meth:`GridWorld.move`), and
+who hears whom is :meth:`GridWorld.neighbours` (Manhattan range, as the reference code). A maze
+has no base; its first start stands in, as in the grid world process.
 """
 
 from __future__ import annotations
@@ -50,6 +55,7 @@ class GridWorld:
         *,
         starts: Sequence[Cell] | None = None,
         pheromone: PheromoneField | None = None,
+        exclusive: bool = False,
     ) -> None:
         if not grid.is_free(base):
             raise ValueError(f"base {base} is not a free cell")
@@ -84,6 +90,11 @@ class GridWorld:
             if not grid.is_free(s):
                 raise ValueError(f"agent start {s} is not a free cell")
         self.positions = [grid.index(s) for s in starts]
+        self.exclusive = exclusive
+        # exclusive: the cells agents stand on (a move into one of them fails)
+        self._occupied: set[int] | None = set(self.positions) if exclusive else None
+        if self._occupied is not None and len(self._occupied) < len(self.positions):
+            raise ValueError("two agents start on one cell of an exclusive world")
         self.carried = [0] * len(self.positions)
         self.delivered = 0
         self.iteration = 0
@@ -95,6 +106,20 @@ class GridWorld:
     def n_agents(self) -> int:
         """Number of agents."""
         return len(self.positions)
+
+    def neighbours(self, i: int, reach: float, metric: str = "euclid") -> list[int]:
+        """The agents other than ``i`` within ``reach`` cells of agent ``i``: who hears its
+        range-limited broadcast. ``manhattan`` counts 4-connected steps, as the maze reference
+        code measures range; ``euclid`` the straight line."""
+        cells = [self.grid.cell(p) for p in self.positions]
+        r0, c0 = cells[i]
+        if metric == "manhattan":
+            near = [abs(r - r0) + abs(c - c0) <= reach for r, c in cells]
+        elif metric == "euclid":
+            near = [(r - r0) ** 2 + (c - c0) ** 2 <= reach * reach for r, c in cells]
+        else:
+            raise ValueError(f"metric must be manhattan or euclid, got {metric!r}")
+        return [j for j, ok in enumerate(near) if ok and j != i]
 
     def perceive(self, i: int) -> Perception:
         """What marking agent ``i`` senses: its cell and its free 4-neighbours."""
@@ -153,7 +178,28 @@ class GridWorld:
             j = self._moves[c][a.move]
             if j < 0:
                 raise ValueError(f"agent {i} at {self.grid.cell(c)} moved into an obstacle")
-            self.positions[i] = j
+            if self._occupied is None:
+                self.positions[i] = j
+            else:
+                self.move(i, a.move)  # fails into an occupied cell
+
+    def move(self, i: int, direction: int) -> bool:
+        """Move agent ``i`` one cell in ``direction`` (0-3: north, east, south, west) unless
+        that cell is an obstacle or, in an exclusive world, occupied; whether it moved."""
+        if not 0 <= direction < len(OFFSETS4):
+            raise ValueError(f"illegal move direction {direction!r}; 0-3 (N, E, S, W)")
+        c = self.positions[i]
+        j = self._moves[c][direction]
+        if j < 0:
+            return False
+        occupied = self._occupied
+        if occupied is not None:
+            if j in occupied:
+                return False
+            occupied.discard(c)
+            occupied.add(j)
+        self.positions[i] = j
+        return True
 
     def step(self, behaviours: Sequence[Behaviour], ants: bool = False) -> None:
         """One iteration: every agent perceives, acts and moves, in index order (section 5.1).
@@ -212,6 +258,7 @@ class GridWorld:
             "carried": list(self.carried),
             "delivered": self.delivered,
             "iteration": self.iteration,
+            "exclusive": self.exclusive,
             "pheromone": None
             if self.pheromone is None
             else {
@@ -235,6 +282,7 @@ class GridWorld:
             tuple(data["base"]),
             starts=[tuple(p) for p in data["positions"]],
             pheromone=field,
+            exclusive=bool(data.get("exclusive", False)),
         )
         world.marks = list(data["marks"])
         world.colours = list(data["colours"])

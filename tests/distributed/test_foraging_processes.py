@@ -10,8 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from experiments.foraging import Setup, run_trial
 from mover import BadArguments, Node, launch
-from programs.foraging_experiment import Setup, run_trial
 from sim_hw.grid import place_resources, random_obstacles
 from tests.distributed._grid import WORLD, start_robots, start_world, write_grid
 from tests.helpers.procs import cluster

@@ -10,10 +10,10 @@ from typing import Any
 import numpy as np
 import pytest
 
+from experiments.maze import run_trial
 from mover import Message
 from programs.explore_maze import explore_maze
 from programs.foraging import foraging
-from programs.maze_experiment import run_trial
 from robots.grid_hal import FREE, OBSTACLE, OCCUPIED
 from sim_hw.grid import (
     Grid,
@@ -210,7 +210,7 @@ async def test_foraging_in_process_finishes(tmp_path: Path) -> None:
 async def test_sequential_turns_repeat_the_in_process_foraging_run(
     tmp_path: Path, size: int, n: int, quantity: int, seed: int, method: str
 ) -> None:
-    from programs.foraging_experiment import Setup, run_trial
+    from experiments.foraging import Setup, run_trial
     from sim_hw.grid import place_resources, random_obstacles
     from tests.distributed._grid import write_grid
 

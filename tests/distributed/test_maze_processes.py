@@ -8,8 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
+from experiments.maze import run_trial
 from mover import Node, launch
-from programs.maze_experiment import run_trial
 from sim_hw.grid import generate_maze, save_maze
 from tests.distributed._grid import WORLD, start_robots, start_world
 from tests.helpers.procs import cluster

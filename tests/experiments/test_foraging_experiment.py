@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from programs import foraging_experiment as fx
+import experiments.foraging as fx
 
 
 def parse(argv: list[str]) -> argparse.Namespace:

@@ -7,7 +7,11 @@ import json
 import numpy as np
 import pytest
 
+from robots.foraging import Action
+from robots.grid_hal import direction_of
 from sim_hw.grid import (
+    Grid,
+    GridWorld,
     Maze,
     MazeFileError,
     MazeWorld,
@@ -106,22 +110,52 @@ def test_broadcast_reaches_only_agents_within_range() -> None:
     assert reach == 7  # 25 % of the larger side
     maze = Maze(grid, [(5, 5), (5, 12), (9, 8), (5, 13), (20, 20)])
     world = MazeWorld(maze, 5)
-    assert world.neighbours(0) == [1, 2]  # distances 7 and 7; (5, 13) is 8 away
-    assert world.neighbours(3) == [1]  # (9, 8) is 9 away
-    assert world.neighbours(4) == []
+    assert world.neighbours(0, reach, "manhattan") == [1, 2]  # distances 7 and 7; (5, 13): 8
+    assert world.neighbours(3, reach, "manhattan") == [1]  # (9, 8) is 9 away
+    assert world.neighbours(4, reach, "manhattan") == []
+    assert world.neighbours(2, 6, "euclid") == [0, 1]  # 5 and 5.7 away; (5, 13) is 6.4
+    with pytest.raises(ValueError, match="metric"):
+        world.neighbours(0, reach, "chebyshev")
 
 
 def test_moves_respect_obstacles_and_other_agents() -> None:
     grid = np.ones((5, 5), dtype=np.int8)
     grid[1, 1:4] = 0
     world = MazeWorld(Maze(grid, [(1, 1), (1, 2)]), 2)
-    assert not world.move(0, (0, 1))  # occupied
-    assert not world.move(0, (1, 0))  # obstacle
-    assert world.move(1, (0, 1))
-    assert world.move(0, (0, 1))
-    assert world.positions == [(1, 2), (1, 3)]
+    assert isinstance(world, GridWorld) and world.exclusive
+    east, south = direction_of(0, 1), direction_of(1, 0)
+    assert east is not None and south is not None
+    assert not world.move(0, east)  # occupied
+    assert not world.move(0, south)  # obstacle
+    assert world.move(1, east)
+    assert world.move(0, east)
+    assert [world.agent_cell(i) for i in range(2)] == [(1, 2), (1, 3)]
     with pytest.raises(ValueError, match="illegal move"):
-        world.move(0, (1, 1))
+        world.move(0, 4)  # a diagonal
+    with pytest.raises(ValueError, match="starts"):
+        MazeWorld(Maze(grid, [(1, 1)]), 2)
+
+
+def test_an_exclusive_world_keeps_agents_apart_in_apply_too() -> None:
+    grid = Grid([[0, 0, 0]])
+    east = Action(move=direction_of(0, 1))
+    shared = GridWorld(grid, (0, 0), starts=[(0, 0), (0, 1)])
+    shared.apply(0, east)
+    assert shared.positions == [1, 1]  # foraging agents share cells
+    apart = GridWorld(grid, (0, 0), starts=[(0, 0), (0, 1)], exclusive=True)
+    apart.apply(0, east)
+    assert apart.positions == [0, 1]  # the move into the occupied cell failed
+    apart.apply(1, east)
+    apart.apply(0, east)
+    assert apart.positions == [1, 2]
+    with pytest.raises(ValueError, match="obstacle"):
+        apart.apply(1, east)  # off the grid: an error, as in a shared world
+    again = GridWorld.from_dict(apart.to_dict())
+    assert again.exclusive
+    again.apply(0, east)
+    assert again.positions == [1, 2]
+    with pytest.raises(ValueError, match="one cell"):
+        GridWorld(grid, (0, 0), starts=[(0, 1), (0, 1)], exclusive=True)
 
 
 def test_maze_file_round_trip(tmp_path) -> None:

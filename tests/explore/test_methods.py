@@ -1,16 +1,13 @@
-"""Every method explores every reachable cell; runs are seeded; the runner's command line."""
+"""Every method explores every reachable cell; runs are seeded; relays are counted."""
 
 from __future__ import annotations
-
-import argparse
-import json
 
 import numpy as np
 import pytest
 
-from programs.maze_experiment import register, run_trial
+from experiments.maze import run_trial
 from robots.explore import METHODS
-from sim_hw.grid import generate_maze, save_maze
+from sim_hw.grid import generate_maze
 
 
 @pytest.mark.parametrize("method", list(METHODS))
@@ -33,87 +30,6 @@ def test_same_seed_same_run(method: str) -> None:
     for key in ("step_ms", "time_s"):
         a.pop(key), b.pop(key)
     assert a == b
-
-
-def _parse(*argv: str) -> argparse.Namespace:
-    parser = argparse.ArgumentParser()
-    register(parser.add_subparsers(dest="cmd"))
-    return parser.parse_args(["maze", *argv])
-
-
-def test_runner_prints_tables_ranking_and_json(tmp_path, capsys) -> None:
-    args = _parse(
-        "--runs",
-        "2",
-        "--seed",
-        "5",
-        "--agents",
-        "1,3",
-        "--size",
-        "12",
-        "--methods",
-        "cu-lvp,nf",
-        "--out",
-        str(tmp_path),
-        "--json",
-    )
-    assert args.func(args) == 0
-    out, err = capsys.readouterr()
-    assert out.startswith("seed: 5\n")
-    assert "exploration rounds — obstacle probability 0.85" in out
-    assert "ranking:" in out
-    assert "[####" in err
-    data = json.loads(out.strip().splitlines()[-1])
-    assert len(data["runs"]) == 2 * 2 * 2 * 2
-    assert (tmp_path / "maze_metrics.png").stat().st_size > 0
-    assert (tmp_path / "maze_composite.png").exists()
-    again = _parse(
-        "--runs",
-        "2",
-        "--seed",
-        "5",
-        "--agents",
-        "1,3",
-        "--size",
-        "12",
-        "--methods",
-        "cu-lvp,nf",
-        "--no-plots",
-        "--json",
-    )
-    again.func(again)
-    rerun = json.loads(capsys.readouterr()[0].strip().splitlines()[-1])
-    strip = [{k: v for k, v in r.items() if k not in ("step_ms", "time_s")} for r in data["runs"]]
-    assert strip == [
-        {k: v for k, v in r.items() if k not in ("step_ms", "time_s")} for r in rerun["runs"]
-    ]
-
-
-def test_runner_on_a_maze_file(tmp_path, capsys) -> None:
-    path = tmp_path / "m.json"
-    save_maze(path, generate_maze(12, 0.5, np.random.default_rng(2), n_starts=3))
-    args = _parse(
-        "--maze",
-        str(path),
-        "--runs",
-        "1",
-        "--agents",
-        "3",
-        "--seed",
-        "1",
-        "--methods",
-        "cu-lvp",
-        "--no-plots",
-        "--json",
-    )
-    assert args.func(args) == 0
-    runs = json.loads(capsys.readouterr()[0].strip().splitlines()[-1])["runs"]
-    assert runs[0]["complete"]
-    assert runs[0]["agents"] == 3
-    assert runs[0]["p"] is None
-    bad = _parse("--maze", str(path), "--agents", "4", "--no-plots")
-    assert bad.func(bad) == 2
-    assert "3 starts" in capsys.readouterr()[1]
 
 
 @pytest.mark.parametrize(
@@ -142,13 +58,10 @@ def test_hedac_agents_caught_in_a_two_cell_cycle_break_out() -> None:
     assert res["complete"]
 
 
-def test_relays_are_counted_and_can_be_turned_off(capsys) -> None:
+def test_relays_are_counted_and_can_be_turned_off() -> None:
     maze = generate_maze(30, 0.85, np.random.default_rng(3), n_starts=8)
     one = run_trial(maze, 8, "cu-lvp", np.random.SeedSequence(1), exchanges=1)
     three = run_trial(maze, 8, "cu-lvp", np.random.SeedSequence(1), exchanges=3)
     assert one["complete"] and three["complete"]
     # the relays' bytes are sent on top of the round's broadcasts
     assert three["comm_sent_kB"] / three["rounds"] > one["comm_sent_kB"] / one["rounds"]
-    bad = _parse("--exchanges", "0", "--no-plots")
-    assert bad.func(bad) == 2
-    assert "--exchanges must be positive" in capsys.readouterr()[1]

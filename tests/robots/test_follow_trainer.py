@@ -8,8 +8,8 @@ import contextlib
 import json
 import math
 
+import programs
 from mover import ProgramHost, launch
-from programs import PROGRAMS
 from robots import Robot
 from sim_hw import RobotDropped, World, WorldServer, WorldSpec, in_process
 
@@ -23,7 +23,7 @@ async def test_the_trainee_records_one_snapshot_per_place(mesh, tmp_path) -> Non
     poses = {"trainer": [2.0, 1.0, 0.0], "trainee": [1.2, 1.0, 0.0]}
     hws = await asyncio.gather(*(in_process(server, n, {"pose": poses[n]}) for n in poses))
     for node, hw in zip(nodes, hws, strict=True):
-        ProgramHost(node, PROGRAMS, Robot(node.name, hw, node))
+        ProgramHost(node, programs.installed(), Robot(node.name, hw, node))
     dataset = tmp_path / "doors.jsonl"
     args = {"trainer": "trainer", "places": PLACES, "dataset": str(dataset)}
     with contextlib.suppress(RobotDropped):

@@ -6,6 +6,7 @@ from __future__ import annotations
 import inspect
 import subprocess
 import sys
+from pathlib import Path
 
 import programs
 import robots.library as library
@@ -28,5 +29,17 @@ def test_the_library_needs_neither_pymunk_nor_sim_hw() -> None:
 
 
 def test_the_programs_are_registered() -> None:
-    assert set(programs.PROGRAMS) >= {"search_and_rescue", "follow_trainer"}
-    assert all(inspect.iscoroutinefunction(p) for p in programs.PROGRAMS.values())
+    found = programs.installed()  # the mover.programs entry points, the one list of programs
+    assert set(found) == {
+        "search_and_rescue",
+        "follow_trainer",
+        "hello_team",
+        "foraging",
+        "explore_maze",
+    }
+    assert all(inspect.iscoroutinefunction(p) for p in found.values())
+    # every module of the package is a program, installed under the module's name
+    modules = {p.stem for p in Path(programs.__file__).parent.glob("[!_]*.py")}
+    assert {name: fn.__module__ for name, fn in found.items()} == {
+        m: f"programs.{m}" for m in modules
+    }

@@ -12,8 +12,8 @@ from typing import Any
 
 import pytest
 
+import programs
 from mover import ProgramHost, launch
-from programs import PROGRAMS
 from robots import Robot
 from sim_hw import RobotDropped, World, WorldServer, in_process
 
@@ -27,7 +27,7 @@ async def test_three_robots_find_gather_and_move_the_box(demo, mesh, seed: int) 
     ws, *nodes = await mesh(["ws", *NAMES])
     hws = await asyncio.gather(*(in_process(server, n) for n in NAMES))
     for node, hw in zip(nodes, hws, strict=True):
-        ProgramHost(node, PROGRAMS, Robot(node.name, hw, node))
+        ProgramHost(node, programs.installed(), Robot(node.name, hw, node))
     reports: list[tuple[float, float, str, str]] = []
     start = time.perf_counter()
     sub = ws.subscribe("mover/run/sr")  # progress, as the workstation sees it

@@ -1,0 +1,110 @@
+"""What the experiment runners share: the progress line, mean ± sd / se, comma lists.
+
+One copy each (the two runners had written their own). The progress line goes to stderr, so
+that stdout holds only the report, the same for the same seeds.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass
+from typing import TypeVar
+
+import numpy as np
+
+T = TypeVar("T")
+
+
+@dataclass(frozen=True)
+class Summary:
+    """Mean, standard deviation (``ddof`` as asked) and count of some measurements."""
+
+    n: int
+    mean: float
+    sd: float
+
+    @property
+    def se(self) -> float:
+        """Standard error of the mean (nan for fewer than two values)."""
+        return self.sd / math.sqrt(self.n) if self.n > 1 else math.nan
+
+    @property
+    def rel_se(self) -> float:
+        """Standard error as a fraction of the mean (inf for fewer than two values)."""
+        return self.se / self.mean if self.n > 1 else math.inf
+
+
+def summary(values: Sequence[float], ddof: int = 1) -> Summary:
+    """:class:`Summary` of ``values``: nan mean without values, nan sd without ``ddof + 1``."""
+    n = len(values)
+    mean = float(np.mean(values)) if n else math.nan
+    sd = float(np.std(values, ddof=ddof)) if n > ddof else math.nan
+    return Summary(n, mean, sd)
+
+
+def plus_minus(mean: float, sd: float, spec: str, sd_spec: str | None = None) -> str:
+    """``mean ±sd``, each number in its format spec (``sd_spec``: ``spec`` after a space)."""
+    return f"{mean:{spec}} ±{sd:{' ' + spec if sd_spec is None else sd_spec}}"
+
+
+def comma_list(
+    kind: Callable[[str], T], choices: Iterable[T] | None = None
+) -> Callable[[str], list[T]]:
+    """An argparse ``type`` for ``--agents 4,8``: a non-empty comma list of ``kind``, each one
+    of ``choices`` if given."""
+    allowed = None if choices is None else list(choices)
+
+    def parse(text: str) -> list[T]:
+        try:
+            items = [kind(t) for t in text.split(",") if t.strip()]
+        except ValueError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+        if allowed is not None:
+            bad = [i for i in items if i not in allowed]
+            if bad:
+                raise argparse.ArgumentTypeError(
+                    f"unknown {bad[0]!r}; choose from {', '.join(map(str, allowed))}"
+                )
+        if not items:
+            raise argparse.ArgumentTypeError("empty list")
+        return items
+
+    return parse
+
+
+class Progress:
+    """A progress bar on one stderr line: ``label [####....] done/total eta status``.
+
+    Redrawn at most twice a second (and always at the end), so that a fast loop does not spend
+    its time writing to the terminal.
+    """
+
+    def __init__(self, total: int, label: str = "", width: int = 30, enabled: bool = True) -> None:
+        self.total, self.label, self.width, self.enabled = total, label, width, enabled
+        self.t0 = time.monotonic()
+        self._drawn = -math.inf
+
+    def update(self, done: int, status: str = "", force: bool = False) -> None:
+        """Show ``done`` of ``total`` with ``status`` after it."""
+        now = time.monotonic()
+        if not self.enabled or (not force and now - self._drawn < 0.5):
+            return
+        self._drawn = now
+        fill = int(self.width * min(done, self.total) / max(self.total, 1))
+        eta = (now - self.t0) / max(done, 1) * max(self.total - done, 0)
+        label = f"{self.label:<22} " if self.label else ""
+        sys.stderr.write(
+            f"\r{label}[{'#' * fill}{'.' * (self.width - fill)}] {done:>4}/{self.total:<4}"
+            f" eta {eta:5.0f}s  {status:<40}"
+        )
+        sys.stderr.flush()
+
+    def close(self, done: int, status: str = "") -> None:
+        """Draw the last state and end the line."""
+        if self.enabled:
+            self.update(done, status, force=True)
+            sys.stderr.write("\n")

@@ -1,0 +1,42 @@
+"""What a foraging experiment runs and reports: one frozen record, made from the command line."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+#: Adaptive mode: a row runs until its standard error is at most this share of its mean.
+TARGET_SE = 0.05
+TABLES = ("1", "2", "3", "ants", "all")
+
+
+@dataclass(frozen=True)
+class ForagingSettings:
+    """The tables to run (every trial's seed derives from ``seed``) and what to print.
+
+    ``runs`` fixes the runs per row; None: adaptive, until the standard error is at most
+    :data:`TARGET_SE` of the mean, with ``min_runs`` to ``max_runs`` runs. ``agents`` and
+    ``sizes`` replace the paper's agent counts (tables 1, 2) and sides (table 3, ants). The
+    c-marking variants are ``literal``, ``forget_at_base`` and ``colour_on_move``.
+    """
+
+    seed: int = 2007
+    table: str = "all"
+    runs: int | None = None
+    min_runs: int = 30
+    max_runs: int = 1000
+    agents: tuple[int, ...] = ()
+    sizes: tuple[int, ...] = ()
+    max_iterations: int = 200_000
+    until: str = "exhausted"
+    literal: bool = False
+    forget_at_base: bool = False
+    colour_on_move: bool = False
+    out: Path = Path("out")
+    quiet: bool = False
+    json: bool = False
+
+    @property
+    def tables(self) -> list[str]:
+        """The tables to run, in order."""
+        return ["1", "2", "ants", "3"] if self.table == "all" else [self.table]

@@ -1,0 +1,100 @@
+"""The maze runner's command line: tables, ranking, JSON, maze files, its usage errors."""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+import numpy as np
+import pytest
+
+from experiments.maze import register
+from mover.cli import UsageError
+from sim_hw.grid import generate_maze, save_maze
+
+
+def _parse(*argv: str) -> argparse.Namespace:
+    parser = argparse.ArgumentParser()
+    register(parser.add_subparsers(dest="cmd"))
+    return parser.parse_args(["maze", *argv])
+
+
+def test_runner_prints_tables_ranking_and_json(tmp_path, capsys) -> None:
+    args = _parse(
+        "--runs",
+        "2",
+        "--seed",
+        "5",
+        "--agents",
+        "1,3",
+        "--size",
+        "12",
+        "--methods",
+        "cu-lvp,nf",
+        "--out",
+        str(tmp_path),
+        "--json",
+    )
+    assert args.func(args) == 0
+    out, err = capsys.readouterr()
+    assert out.startswith("seed: 5\n")
+    assert "exploration rounds — obstacle probability 0.85" in out
+    assert "ranking:" in out
+    assert "[####" in err
+    data = json.loads(out.strip().splitlines()[-1])
+    assert len(data["runs"]) == 2 * 2 * 2 * 2
+    assert (tmp_path / "maze_metrics.png").stat().st_size > 0
+    assert (tmp_path / "maze_composite.png").exists()
+    again = _parse(
+        "--runs",
+        "2",
+        "--seed",
+        "5",
+        "--agents",
+        "1,3",
+        "--size",
+        "12",
+        "--methods",
+        "cu-lvp,nf",
+        "--no-plots",
+        "--json",
+    )
+    again.func(again)
+    rerun = json.loads(capsys.readouterr()[0].strip().splitlines()[-1])
+    strip = [{k: v for k, v in r.items() if k not in ("step_ms", "time_s")} for r in data["runs"]]
+    assert strip == [
+        {k: v for k, v in r.items() if k not in ("step_ms", "time_s")} for r in rerun["runs"]
+    ]
+
+
+def test_runner_on_a_maze_file(tmp_path, capsys) -> None:
+    path = tmp_path / "m.json"
+    save_maze(path, generate_maze(12, 0.5, np.random.default_rng(2), n_starts=3))
+    args = _parse(
+        "--maze",
+        str(path),
+        "--runs",
+        "1",
+        "--agents",
+        "3",
+        "--seed",
+        "1",
+        "--methods",
+        "cu-lvp",
+        "--no-plots",
+        "--json",
+    )
+    assert args.func(args) == 0
+    runs = json.loads(capsys.readouterr()[0].strip().splitlines()[-1])["runs"]
+    assert runs[0]["complete"]
+    assert runs[0]["agents"] == 3
+    assert runs[0]["p"] is None
+    bad = _parse("--maze", str(path), "--agents", "4", "--no-plots")
+    with pytest.raises(UsageError, match="3 starts, 4 agents asked"):
+        bad.func(bad)
+
+
+def test_exchanges_must_be_positive() -> None:
+    bad = _parse("--exchanges", "0", "--no-plots")
+    with pytest.raises(UsageError, match="--exchanges must be positive"):
+        bad.func(bad)
