@@ -9,6 +9,7 @@ from pathlib import Path
 import pytest
 
 import experiments.foraging as fx
+from mover.cli import UsageError
 
 
 def parse(argv: list[str]) -> argparse.Namespace:
@@ -53,3 +54,29 @@ def test_variants_reach_the_agents() -> None:
         fx.SETUP2, 3, "cmarking", (1, 2, 0), (1, 2, 0, 3, 0), 100_000, colour_source=False
     )
     assert letter.finished and letter != base
+
+
+@pytest.mark.parametrize(
+    ("argv", "problem"),
+    [
+        (["--runs", "0"], "--runs must be positive"),
+        (["--min-runs", "50", "--max-runs", "40"], "at most --max-runs"),
+        (["--agents", "0,2"], "--agents must be positive"),
+        (["--sizes", "3"], "--sizes at least 5"),
+        (["--max-iterations", "0"], "--max-iterations must be positive"),
+    ],
+)
+def test_usage_errors(argv: list[str], problem: str) -> None:
+    args = parse(argv)
+    with pytest.raises(UsageError, match=problem):
+        args.func(args)
+
+
+def test_settings_are_a_frozen_record_not_the_namespace() -> None:
+    args = parse(["--table", "2", "--agents", "1,3", "--runs", "4"])
+    s = fx.settings(args)
+    assert (s.table, s.agents, s.runs, s.tables) == ("2", (1, 3), 4, ["2"])
+    assert fx.settings(parse([])).tables == ["1", "2", "ants", "3"]
+    with pytest.raises(AttributeError):
+        s.runs = 5  # type: ignore[misc]
+    assert vars(args) == vars(parse(["--table", "2", "--agents", "1,3", "--runs", "4"]))

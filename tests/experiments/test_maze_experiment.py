@@ -98,3 +98,28 @@ def test_exchanges_must_be_positive() -> None:
     bad = _parse("--exchanges", "0", "--no-plots")
     with pytest.raises(UsageError, match="--exchanges must be positive"):
         bad.func(bad)
+
+
+def test_python_m_experiments_maze_prints_a_usage_error_in_one_line(
+    tmp_path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from experiments.cli import main
+
+    assert main("maze", register, ["--load", str(tmp_path / "none.json"), "--no-plots"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("python -m experiments.maze: ") and "no JSON line of runs" in err
+    assert "\n" not in err
+    assert main("maze", register, ["--runs", "1", "--size", "8", "--agents", "1", "--seed",
+                                   "3", "--methods", "nf", "--no-plots"]) == 0  # fmt: skip
+    assert capsys.readouterr().out.startswith("seed: 3\n")
+
+
+def test_settings_come_from_the_command_line_once() -> None:
+    from experiments.maze import settings
+
+    args = _parse("--runs", "3", "--hedac-runs", "1", "--agents", "2,4", "--no-plots")
+    s = settings(args)
+    assert (s.runs, s.runs_for("hedac"), s.runs_for("nf"), s.agents, s.out) == (
+        3, 1, 3, (2, 4), None,
+    )  # fmt: skip
+    assert args.seed is None and 0 <= s.seed < 2**32  # a random seed, not written onto args
