@@ -8,66 +8,9 @@
 The continuous wing's public face is re-exported here, since it is the default world.
 """
 
+from sim_hw import continuous as _continuous
 from sim_hw._process import STATE_TOPIC
-from sim_hw.continuous import (
-    DT,
-    STEPS_PER_TICK,
-    TICK,
-    BoxSpec,
-    CameraSpec,
-    ImmovableSpec,
-    MarkerSpec,
-    ObstacleSpec,
-    OdometrySpec,
-    Recorder,
-    RobotDropped,
-    RobotSpec,
-    SimHardware,
-    SonarSpec,
-    World,
-    WorldFileError,
-    WorldServer,
-    WorldSpec,
-    double_corridor,
-    in_process,
-    load_world,
-    parse_robot,
-    parse_world,
-    plot_recording,
-    random_obstacles,
-    read_recording,
-    remote,
-    serve_world,
-)
+from sim_hw.continuous import *  # noqa: F403
 
-__all__ = [
-    "DT",
-    "STATE_TOPIC",
-    "STEPS_PER_TICK",
-    "TICK",
-    "BoxSpec",
-    "CameraSpec",
-    "ImmovableSpec",
-    "MarkerSpec",
-    "ObstacleSpec",
-    "OdometrySpec",
-    "Recorder",
-    "RobotDropped",
-    "RobotSpec",
-    "SimHardware",
-    "SonarSpec",
-    "World",
-    "WorldFileError",
-    "WorldServer",
-    "WorldSpec",
-    "double_corridor",
-    "in_process",
-    "load_world",
-    "parse_robot",
-    "parse_world",
-    "plot_recording",
-    "random_obstacles",
-    "read_recording",
-    "remote",
-    "serve_world",
-]
+__all__ = ["STATE_TOPIC"]
+__all__ += _continuous.__all__

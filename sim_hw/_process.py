@@ -10,6 +10,7 @@ gridworld``.
 
 from __future__ import annotations
 
+import argparse
 import asyncio
 import logging
 from collections.abc import Callable
@@ -26,6 +27,56 @@ COMMAND_QUEUE = 10_000
 
 STATE_TOPIC = "world/state"
 """The team-wide topic on which a world process streams its snapshots."""
+
+
+def positive(text: str) -> float:
+    """An argparse type: a number above zero."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"must be positive, got {text}")
+    return value
+
+
+def count(text: str) -> int:
+    """An argparse type: a whole number, zero or more."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"must be >= 0, got {text}")
+    return value
+
+
+def add_world_arguments(
+    p: argparse.ArgumentParser, *, name: str, timeout: float, tick: str, seed: str
+) -> None:
+    """The options every world process takes: ``--expect``, ``--timeout``, ``--seed``,
+    ``--name``, ``--quit-when-empty`` (``tick`` names a tick, ``seed`` what the seed draws)."""
+    p.add_argument(
+        "--expect",
+        type=count,
+        default=0,
+        metavar="N",
+        help=f"lock-step: wait for N robots before the first {tick}",
+    )
+    p.add_argument(
+        "--timeout",
+        type=positive,
+        default=timeout,
+        metavar="S",
+        help=f"lock-step: drop a robot silent for S wall seconds in a {tick} (default {timeout:g})",
+    )
+    p.add_argument("--seed", type=int, default=0, help=f"seed of {seed}")
+    p.add_argument("--name", default=name, help=f"the world process's node name (default {name})")
+    p.add_argument(
+        "--quit-when-empty",
+        action="store_true",
+        help="stop once robots have come and all have left",
+    )
 
 
 def serve(node: Any, door: LockstepDoor[Any], *, frames: bool = True) -> None:

@@ -15,18 +15,9 @@ from pathlib import Path
 from typing import Any
 
 from mover.cli import UsageError
+from sim_hw._process import add_world_arguments, positive
 
 log = logging.getLogger("sim_hw.continuous.cli")
-
-
-def _positive(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"must be positive, got {text}")
-    return value
 
 
 def register_world(sub: Any) -> None:
@@ -40,32 +31,12 @@ def register_world(sub: Any) -> None:
     )
     p.add_argument(
         "--speed",
-        type=_positive,
+        type=positive,
         default=1.0,
         help="real-time mode: simulated seconds per wall second (default 1)",
     )
-    p.add_argument("--seed", type=int, default=0, help="seed of the sensor noise")
     p.add_argument("--record", metavar="FILE", help="record the run as JSON lines")
-    p.add_argument(
-        "--expect",
-        type=int,
-        default=0,
-        metavar="N",
-        help="lock-step: wait for N robots before the first tick",
-    )
-    p.add_argument(
-        "--timeout",
-        type=_positive,
-        default=2.0,
-        metavar="S",
-        help="lock-step: drop a robot silent for S wall seconds (default 2)",
-    )
-    p.add_argument("--until", type=_positive, metavar="T", help="stop at simulated time T")
-    p.add_argument(
-        "--quit-when-empty",
-        action="store_true",
-        help="stop once robots have come and all have left",
-    )
+    p.add_argument("--until", type=positive, metavar="T", help="stop at simulated time T")
     p.add_argument(
         "--state-rate",
         type=float,
@@ -73,7 +44,7 @@ def register_world(sub: Any) -> None:
         metavar="HZ",
         help="snapshots per simulated second on world/state (0: none)",
     )
-    p.add_argument("--name", default="world", help="the world process's node name")
+    add_world_arguments(p, name="world", timeout=2.0, tick="tick", seed="the sensor noise")
     p.set_defaults(func=run_world)
 
 
@@ -89,8 +60,6 @@ def run_world(args: argparse.Namespace) -> int:
         spec = load_world(args.worldfile)
     except WorldFileError as exc:
         raise UsageError(str(exc)) from None
-    if args.expect < 0:
-        raise UsageError(f"--expect must be >= 0, got {args.expect}")
     try:
         team, config = Team.from_env(), NodeConfig.from_env()
     except ValueError as exc:

@@ -27,6 +27,7 @@ from pathlib import Path
 from typing import Any
 
 from mover.cli import UsageError
+from sim_hw._process import add_world_arguments
 
 log = logging.getLogger("sim_hw.grid.cli")
 
@@ -41,22 +42,9 @@ def register(sub: Any) -> None:
     )
     p.add_argument("file", metavar="FILE", help="a grid file (text or JSON) or a maze JSON")
     p.add_argument("--layout", metavar="JSON", help="layout settings as a JSON object")
-    p.add_argument(
-        "--expect",
-        type=int,
-        default=0,
-        metavar="N",
-        help="wait for N robots before the first round",
+    add_world_arguments(
+        p, name="gridworld", timeout=5.0, tick="round", seed="the world's own draws"
     )
-    p.add_argument(
-        "--timeout",
-        type=float,
-        default=5.0,
-        metavar="S",
-        help="drop a robot silent for S wall seconds in a round (default 5)",
-    )
-    p.add_argument("--seed", type=int, default=0, help="seed of the world's own draws")
-    p.add_argument("--name", default="gridworld", help="the world process's node name")
     p.add_argument(
         "--until",
         choices=["exhausted", "delivered", "explored", "never"],
@@ -76,11 +64,6 @@ def register(sub: Any) -> None:
         default=0,
         metavar="N",
         help="a snapshot every N rounds (with --snapshots; 0: only at the end)",
-    )
-    p.add_argument(
-        "--quit-when-empty",
-        action="store_true",
-        help="stop once robots have come and all have left",
     )
     p.set_defaults(func=run)
 
@@ -203,10 +186,6 @@ def run(args: argparse.Namespace) -> int:
 
     from ._server import serve_grid
 
-    if args.expect < 0:
-        raise UsageError(f"--expect must be >= 0, got {args.expect}")
-    if not args.timeout > 0:
-        raise UsageError(f"--timeout must be positive, got {args.timeout}")
     try:
         layout = json.loads(args.layout) if args.layout else {}
     except json.JSONDecodeError as exc:

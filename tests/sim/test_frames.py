@@ -7,19 +7,30 @@ test_remote.py); what is checked here is what goes over the wire.
 from __future__ import annotations
 
 import asyncio
+import contextlib
+from collections.abc import AsyncIterator
+from typing import Any
 
 from mover import Node, NodeConfig, Team, free_port
-from sim_hw import World, WorldServer, random_obstacles, remote, serve_world
+from sim_hw import World, WorldServer, random_obstacles, remote
 from sim_hw._caller import frame_topics
 from sim_hw._process import serve
 
 
-def _configs() -> tuple[NodeConfig, NodeConfig]:
+@contextlib.asynccontextmanager
+async def _team(expect: int, *names: str, frames: bool = True) -> AsyncIterator[list[Any]]:
+    """A world node serving a fresh lock-step world, and member nodes ``names``, all joined."""
     port = free_port()
-    return (
-        NodeConfig(listen=(f"tcp/127.0.0.1:{port}",)),
-        NodeConfig(connect=(f"tcp/127.0.0.1:{port}",)),
-    )
+    seed = NodeConfig(listen=(f"tcp/127.0.0.1:{port}",))
+    peer = NodeConfig(connect=(f"tcp/127.0.0.1:{port}",))
+    team = Team.generate("frames")
+    server = WorldServer(World(random_obstacles((6.0, 6.0), 0)), expect=expect)
+    async with contextlib.AsyncExitStack() as stack:
+        world = await stack.enter_async_context(Node("world", team, kind="world", config=seed))
+        nodes = [await stack.enter_async_context(Node(n, team, config=peer)) for n in names]
+        serve(world, server, frames=frames)
+        await world.team.wait_for({"world", *names}, timeout=10)
+        yield [server, world, *nodes]
 
 
 async def _ticks(hw: object, n: int) -> list[float]:
@@ -32,16 +43,7 @@ async def _ticks(hw: object, n: int) -> list[float]:
 
 
 async def test_ticks_go_as_frames_after_the_first() -> None:
-    seed, peer = _configs()
-    team = Team.generate("frames")
-    server = WorldServer(World(random_obstacles((6.0, 6.0), 0)), expect=2)
-    async with (
-        Node("world", team, kind="world", config=seed) as world,
-        Node("a", team, config=peer) as a,
-        Node("b", team, config=peer) as b,
-    ):
-        serve_world(world, server)
-        await a.team.wait_for({"world", "a", "b"}, timeout=10)
+    async with _team(2, "a", "b") as (_, world, a, b):
         ha, hb = await asyncio.gather(remote(a, "a"), remote(b, "b"))
         times = await asyncio.wait_for(asyncio.gather(_ticks(ha, 20), _ticks(hb, 20)), 30)
         assert times[0] == times[1] and len(set(times[0])) == 20  # in lock-step, tick by tick
@@ -49,20 +51,10 @@ async def test_ticks_go_as_frames_after_the_first() -> None:
         assert a.stats["sent.call"] == 2 and b.stats["sent.call"] == 2
         assert world.stats["recv.bc"] == 38
         assert world.stats["sent.bc_frames"] == 19  # one frame of readings per tick, for both
-        await server.aclose()
 
 
 async def test_a_command_frame_only_counts_from_its_robot() -> None:
-    seed, peer = _configs()
-    team = Team.generate("frames")
-    server = WorldServer(World(random_obstacles((6.0, 6.0), 0)), expect=1)
-    async with (
-        Node("world", team, kind="world", config=seed) as world,
-        Node("a", team, config=peer) as a,
-        Node("mallory", team, config=peer) as mallory,
-    ):
-        serve_world(world, server)
-        await a.team.wait_for({"world", "a", "mallory"}, timeout=10)
+    async with _team(1, "a", "mallory") as (server, _, a, mallory):
         ha = await remote(a, "a")
         await ha.clock.tick()  # the first tick, by call
         commands, _ = frame_topics("world")
@@ -74,20 +66,10 @@ async def test_a_command_frame_only_counts_from_its_robot() -> None:
         assert server.world.robots["a"].v == 0.0
         await asyncio.wait_for(_ticks(ha, 3), 10)
         assert server.world.tick == 4
-        await server.aclose()
 
 
 async def test_without_frames_every_tick_is_a_call() -> None:
-    seed, peer = _configs()
-    team = Team.generate("frames")
-    server = WorldServer(World(random_obstacles((6.0, 6.0), 0)), expect=1)
-    async with (
-        Node("world", team, kind="world", config=seed) as world,
-        Node("a", team, config=peer) as a,
-    ):
-        serve(world, server, frames=False)
-        await a.team.wait_for({"world", "a"}, timeout=10)
+    async with _team(1, "a", frames=False) as (_, world, a):
         ha = await remote(a, "a")
         await asyncio.wait_for(_ticks(ha, 5), 10)
         assert a.stats["sent.call"] == 6 and world.stats["recv.bc"] == 0
-        await server.aclose()
