@@ -6,7 +6,7 @@
 
     async def test_my_program():
         async with cluster() as c, c.launcher() as node:
-            await c.world("worlds/search_rescue.toml", expect=2)
+            await c.world("worlds/search_and_rescue.toml", expect=2)
             await c.robots("ernst", "moseley")
             outcomes = await launch(node, "my_program", ["ernst", "moseley"], {}, run="t1")
 

@@ -29,11 +29,12 @@ async def run_demo(tmp_path: Path, *args: str) -> tuple[int, str]:
 
 
 async def test_hello_team_demo_runs_on_processes(tmp_path: Path) -> None:
-    world = str(ROOT / "worlds" / "search_rescue.toml")
+    world = str(ROOT / "worlds" / "search_and_rescue.toml")
     code, out = await run_demo(tmp_path, "--program", "hello_team", "--world", world)
     assert code == 0, out
-    assert "ernst: heard who=[moseley]" in out
-    assert "step 1 (and): 2 messages for 2 members (bound 2)" in out
+    assert "ernst: heard who=[elvis, moseley]" in out  # 2 m either side, within its 3 m
+    assert "moseley: heard who=[ernst]" in out  # elvis is 4 m away
+    assert "step 1 (and): 4 messages for 3 members (bound 4)" in out
     assert (tmp_path / "trajectories.png").stat().st_size > 1000
 
 

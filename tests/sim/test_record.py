@@ -23,7 +23,7 @@ WORLDS = Path(__file__).parents[2] / "worlds"
 
 
 async def _record(path: Path) -> World:
-    world = World(load_world(WORLDS / "search_rescue.toml"), seed=2)
+    world = World(load_world(WORLDS / "search_and_rescue.toml"), seed=2)
     recorder = Recorder(path, world)
     snapshots: list[dict] = []
     server = WorldServer(
@@ -46,7 +46,7 @@ async def test_recording_and_replay(tmp_path: Path, capsys: pytest.CaptureFixtur
     rec = tmp_path / "run.jsonl"
     await _record(rec)
     header, ticks = read_recording(rec)
-    assert header["size"] == [12.0, 9.0]
+    assert header["size"] == [9.0, 6.0]
     assert len(ticks) == 52  # the start, the walkers' first (stop) tick and 50 more
     assert ticks[-1]["robots"]["ernst"][:2] != ticks[1]["robots"]["ernst"][:2]
     assert set(ticks[1]["commands"]) == {"ernst", "moseley"}

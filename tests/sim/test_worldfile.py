@@ -25,10 +25,10 @@ def test_example_worlds_load_and_run(path: Path) -> None:
     assert world.time == pytest.approx(1.0)
 
 
-def test_search_rescue_file_fields() -> None:
-    spec = load_world(Path(__file__).parents[2] / "worlds" / "search_rescue.toml")
-    assert spec.size == (12.0, 9.0)
-    assert spec.robots["moseley"].pose == (1.0, 2.0, 0.0)
+def test_search_and_rescue_file_fields() -> None:
+    spec = load_world(Path(__file__).parents[2] / "worlds" / "search_and_rescue.toml")
+    assert spec.size == (9.0, 6.0)
+    assert spec.robots["moseley"].pose == (0.8, 5.0, 0.0)
     assert spec.robots["ernst"].sonar.noise == 0.01
     assert spec.robot.camera.fov == pytest.approx(math.radians(120))
     victim = next(b for b in spec.boxes if b.id == "victim")
