@@ -36,7 +36,7 @@ from robots.explore import (
     make_team,
 )
 from robots.grid_hal import direction_of
-from sim_hw.grid import Maze, MazeWorld, broadcast_range, generate_maze, observable, star_view
+from sim_hw.grid import Maze, broadcast_range, generate_maze, maze_world, observable, star_view
 
 from .._common import Progress
 from ._settings import MazeSettings
@@ -62,7 +62,7 @@ def run_trial(
 ) -> dict[str, Any]:
     """One seeded exploration run; returns its metrics (section IV-C). ``exchanges`` is the
     number of map exchanges per round (:data:`robots.explore.EXCHANGES`; 1: the paper's)."""
-    world = MazeWorld(maze, n_agents)
+    world = maze_world(maze, n_agents)
     cells = [world.agent_cell(i) for i in range(n_agents)]
     team = make_team(method, maze.shape, cells, seed)
     target = observable(maze.grid, cells)

@@ -12,7 +12,7 @@ border is then walled again.
 
 Cells: 0 free, 1 obstacle. Positions are ``(row, col)``. This module is the simulated hardware
 side: the ground truth, the range-2 star sensor (section III-A), the radio's reach (III-B);
-the agents' cells and moves are an exclusive :class:`~sim_hw.grid.GridWorld` (:func:`MazeWorld`).
+the agents' cells and moves are an exclusive :class:`~sim_hw.grid.GridWorld` (:func:`maze_world`).
 """
 
 from __future__ import annotations
@@ -171,7 +171,7 @@ def broadcast_range(shape: tuple[int, int]) -> int:
     return int(0.25 * max(shape))
 
 
-def MazeWorld(maze: Maze, n_agents: int) -> GridWorld:  # the name the public face gives it
+def maze_world(maze: Maze, n_agents: int) -> GridWorld:
     """The grid world of ``maze`` with ``n_agents`` on its first starts: exclusive cells (a move
     into an occupied cell fails, section III-A), the first start standing in for the base.
     Who hears whom: ``world.neighbours(i, broadcast_range(maze.shape), "manhattan")``."""

@@ -51,6 +51,21 @@ def disc_view(grid: Grid, origin: Cell, radius: float) -> list[Cell]:
     return out
 
 
+def hearers(cells: Sequence[Cell], i: int, reach: float, metric: str = "euclid") -> list[int]:
+    """Indices of the cells other than ``i`` within ``reach`` cells of cell ``i``: who hears a
+    range-limited broadcast from there. ``manhattan`` counts 4-connected steps (as the maze
+    reference code measures range), ``euclid`` the straight line."""
+    r0, c0 = cells[i]
+    if metric == "manhattan":
+        near = [abs(r - r0) + abs(c - c0) <= reach for r, c in cells]
+    elif metric == "euclid":
+        lim = reach * reach
+        near = [(r - r0) ** 2 + (c - c0) ** 2 <= lim for r, c in cells]
+    else:
+        raise ValueError(f"metric must be manhattan or euclid, got {metric!r}")
+    return [j for j, ok in enumerate(near) if ok and j != i]
+
+
 def within_range(
     positions: Sequence[Cell], i: int, radius: float, cell_size: float = 1.0
 ) -> list[int]:
@@ -58,8 +73,4 @@ def within_range(
 
     The in-process stand-in for a range-limited broadcast: who hears agent ``i``.
     """
-    r0, c0 = positions[i]
-    lim = (radius / cell_size) ** 2
-    return [
-        j for j, (r, c) in enumerate(positions) if j != i and (r - r0) ** 2 + (c - c0) ** 2 <= lim
-    ]
+    return hearers(positions, i, radius / cell_size)

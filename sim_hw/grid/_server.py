@@ -38,6 +38,7 @@ from sim_hw._process import serve
 from sim_hw.grid._grid import Cell
 from sim_hw.grid._maze import observable, star_view
 from sim_hw.grid._render import render_text
+from sim_hw.grid._sensing import hearers
 from sim_hw.grid._world import GridWorld
 
 log = logging.getLogger("sim_hw.grid")
@@ -300,23 +301,11 @@ class GridStepper:
         }
 
     def _hears(self, name: str) -> list[str]:
-        me = self.bots[name]
         if self.radio is None:
             return sorted(n for n in self.bots if n != name)
-        r0, c0 = self.grid.cell(me.cell)
-        out = []
-        for other, bot in sorted(self.bots.items()):
-            if other == name:
-                continue
-            r, c = self.grid.cell(bot.cell)
-            d = (
-                abs(r - r0) + abs(c - c0)
-                if self.metric == "manhattan"
-                else math.hypot(r - r0, c - c0)
-            )
-            if d <= self.radio:
-                out.append(other)
-        return out
+        names = sorted(self.bots)
+        cells = [self.grid.cell(self.bots[n].cell) for n in names]
+        return [names[j] for j in hearers(cells, names.index(name), self.radio, self.metric)]
 
 
 class GridServer(LockstepDoor[GridStepper]):

@@ -35,6 +35,7 @@ from robots.foraging import (
 )
 from sim_hw.grid._grid import OFFSETS4, Cell, Grid
 from sim_hw.grid._pheromone import PheromoneField
+from sim_hw.grid._sensing import hearers
 
 
 class Behaviour(Protocol):
@@ -111,15 +112,7 @@ class GridWorld:
         """The agents other than ``i`` within ``reach`` cells of agent ``i``: who hears its
         range-limited broadcast. ``manhattan`` counts 4-connected steps, as the maze reference
         code measures range; ``euclid`` the straight line."""
-        cells = [self.grid.cell(p) for p in self.positions]
-        r0, c0 = cells[i]
-        if metric == "manhattan":
-            near = [abs(r - r0) + abs(c - c0) <= reach for r, c in cells]
-        elif metric == "euclid":
-            near = [(r - r0) ** 2 + (c - c0) ** 2 <= reach * reach for r, c in cells]
-        else:
-            raise ValueError(f"metric must be manhattan or euclid, got {metric!r}")
-        return [j for j, ok in enumerate(near) if ok and j != i]
+        return hearers([self.grid.cell(p) for p in self.positions], i, reach, metric)
 
     def perceive(self, i: int) -> Perception:
         """What marking agent ``i`` senses: its cell and its free 4-neighbours."""

@@ -97,10 +97,10 @@ def test_agent_never_plans_into_a_known_obstacle() -> None:
 
 def test_cu_lvp_goals_stay_inside_the_agents_regions() -> None:
     from robots.grid_hal import direction_of
-    from sim_hw.grid import MazeWorld, broadcast_range
+    from sim_hw.grid import broadcast_range, maze_world
 
     maze = generate_maze(30, 0.85, np.random.default_rng(11), n_starts=6)
-    world = MazeWorld(maze, 6)
+    world = maze_world(maze, 6)
     team = make_team("cu-lvp", maze.shape, maze.starts[:6], 4)
     reach = broadcast_range(maze.shape)
     for _ in range(60):

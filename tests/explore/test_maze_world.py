@@ -14,10 +14,10 @@ from sim_hw.grid import (
     GridWorld,
     Maze,
     MazeFileError,
-    MazeWorld,
     broadcast_range,
     generate_maze,
     load_maze,
+    maze_world,
     save_maze,
     star_view,
 )
@@ -109,7 +109,7 @@ def test_broadcast_reaches_only_agents_within_range() -> None:
     reach = broadcast_range(grid.shape)
     assert reach == 7  # 25 % of the larger side
     maze = Maze(grid, [(5, 5), (5, 12), (9, 8), (5, 13), (20, 20)])
-    world = MazeWorld(maze, 5)
+    world = maze_world(maze, 5)
     assert world.neighbours(0, reach, "manhattan") == [1, 2]  # distances 7 and 7; (5, 13): 8
     assert world.neighbours(3, reach, "manhattan") == [1]  # (9, 8) is 9 away
     assert world.neighbours(4, reach, "manhattan") == []
@@ -121,7 +121,7 @@ def test_broadcast_reaches_only_agents_within_range() -> None:
 def test_moves_respect_obstacles_and_other_agents() -> None:
     grid = np.ones((5, 5), dtype=np.int8)
     grid[1, 1:4] = 0
-    world = MazeWorld(Maze(grid, [(1, 1), (1, 2)]), 2)
+    world = maze_world(Maze(grid, [(1, 1), (1, 2)]), 2)
     assert isinstance(world, GridWorld) and world.exclusive
     east, south = direction_of(0, 1), direction_of(1, 0)
     assert east is not None and south is not None
@@ -133,7 +133,7 @@ def test_moves_respect_obstacles_and_other_agents() -> None:
     with pytest.raises(ValueError, match="illegal move"):
         world.move(0, 4)  # a diagonal
     with pytest.raises(ValueError, match="starts"):
-        MazeWorld(Maze(grid, [(1, 1)]), 2)
+        maze_world(Maze(grid, [(1, 1)]), 2)
 
 
 def test_an_exclusive_world_keeps_agents_apart_in_apply_too() -> None:
