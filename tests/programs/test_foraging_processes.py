@@ -13,8 +13,8 @@ import pytest
 from experiments.foraging import Setup, run_trial
 from mover import BadArguments, Node, launch
 from sim_hw.grid import place_resources, random_obstacles
-from tests.distributed._grid import WORLD, start_robots, start_world, write_grid
 from tests.helpers.procs import cluster
+from tests.programs._grid import WORLD, start_robots, start_world, write_grid
 
 BASE = (6, 6)
 

@@ -6,7 +6,7 @@ import numpy as np
 
 from robots.foraging import NO_COLOUR, TRAIL, CMarkingAgent, Neighbour, Perception, Task
 from sim_hw.grid import Grid, GridWorld, place_resources, random_obstacles
-from tests.foraging.test_foraging_marking import lemma_4_1_holds
+from tests.robots.foraging.test_foraging_marking import lemma_4_1_holds
 
 
 def agent(seed: int = 0, **kw: object) -> CMarkingAgent:

@@ -19,7 +19,7 @@ from sim_hw import (
 )
 from sim_hw.continuous._walker import random_walk
 
-WORLDS = Path(__file__).parents[2] / "worlds"
+WORLDS = Path(__file__).parents[3] / "worlds"
 
 
 async def _record(path: Path) -> World:

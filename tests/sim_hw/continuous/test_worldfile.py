@@ -10,7 +10,7 @@ import pytest
 
 from sim_hw import World, WorldFileError, double_corridor, load_world, random_obstacles
 
-WORLDS = sorted((Path(__file__).parents[2] / "worlds").glob("*.[tj]*"))
+WORLDS = sorted((Path(__file__).parents[3] / "worlds").glob("*.[tj]*"))
 
 
 @pytest.mark.parametrize("path", WORLDS, ids=lambda p: p.name)
@@ -26,7 +26,7 @@ def test_example_worlds_load_and_run(path: Path) -> None:
 
 
 def test_search_and_rescue_file_fields() -> None:
-    spec = load_world(Path(__file__).parents[2] / "worlds" / "search_and_rescue.toml")
+    spec = load_world(Path(__file__).parents[3] / "worlds" / "search_and_rescue.toml")
     assert spec.size == (9.0, 6.0)
     assert spec.robots["moseley"].pose == (0.8, 5.0, 0.0)
     assert spec.robots["ernst"].sonar.noise == 0.01

@@ -212,7 +212,7 @@ async def test_sequential_turns_repeat_the_in_process_foraging_run(
 ) -> None:
     from experiments.foraging import Setup, run_trial
     from sim_hw.grid import place_resources, random_obstacles
-    from tests.distributed._grid import write_grid
+    from tests.programs._grid import write_grid
 
     env_seed, agent_seed = (seed, 1, 0), (seed, 1, 0, n, 0)
     trial = run_trial(Setup(size, 0.05, 2, quantity), n, method, env_seed, agent_seed, 20000)

@@ -13,8 +13,8 @@ from pathlib import Path
 
 from mover import Node, launch
 from sim_hw.grid import place_resources, random_obstacles
-from tests.distributed._grid import WORLD, start_robots, start_world, write_grid
 from tests.helpers.procs import cluster
+from tests.programs._grid import WORLD, start_robots, start_world, write_grid
 
 BASE = (7, 7)
 NAMES = ["k0", "k1", "k2", "k3"]

@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 
 from mover import Node, launch
-from tests.distributed._grid import WORLD, start_robots, start_world, write_grid
 from tests.helpers.procs import cluster
+from tests.programs._grid import WORLD, start_robots, start_world, write_grid
 
 
 async def test_two_robots_join_tick_and_forage(tmp_path: Path) -> None:

@@ -24,7 +24,7 @@ from sim_hw.continuous._walker import random_walk
 
 pytestmark = pytest.mark.timeout(90)
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 WORLD = """
 [generator]
 kind = "random_obstacles"

@@ -11,8 +11,8 @@ import numpy as np
 from experiments.maze import run_trial
 from mover import Node, launch
 from sim_hw.grid import generate_maze, save_maze
-from tests.distributed._grid import WORLD, start_robots, start_world
 from tests.helpers.procs import cluster
+from tests.programs._grid import WORLD, start_robots, start_world
 
 SEED = 2
 
