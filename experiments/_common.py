@@ -108,3 +108,15 @@ class Progress:
         if self.enabled:
             self.update(done, status, force=True)
             sys.stderr.write("\n")
+
+
+def runner_parser(
+    sub: argparse._SubParsersAction[argparse.ArgumentParser],
+    name: str,
+    help: str,
+    doc: str | None,
+) -> argparse.ArgumentParser:
+    """The sub-parser of one experiment runner, its module docstring as the description."""
+    return sub.add_parser(
+        name, help=help, description=doc, formatter_class=argparse.RawDescriptionHelpFormatter
+    )

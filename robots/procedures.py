@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import asdict
-from typing import Any
+from typing import Any, Protocol
 
 from .grid_hal import GridHardware
 from .hal import Hardware
@@ -28,14 +28,6 @@ def body_procedures(hw: Hardware) -> dict[str, Callable[..., Any]]:
     ``camera`` (``[kind, id, status, range, bearing]`` per sighting).
     """
 
-    def pose() -> list[float]:
-        """The robot's dead-reckoned pose (x, y, heading)."""
-        return list(hw.odometry.pose())
-
-    def stop() -> None:
-        """Stop the motors."""
-        hw.drive.stop()
-
     def sense() -> dict[str, Any]:
         """What the robot senses now."""
         return {
@@ -48,7 +40,7 @@ def body_procedures(hw: Hardware) -> dict[str, Callable[..., Any]]:
             else None,
         }
 
-    return {"robot.pose": pose, "robot.stop": stop, "robot.sense": sense}
+    return {**_pose_and_stop(hw.odometry, hw.drive), "robot.sense": sense}
 
 
 def grid_procedures(hw: GridHardware) -> dict[str, Callable[..., Any]]:
@@ -60,14 +52,6 @@ def grid_procedures(hw: GridHardware) -> dict[str, Callable[..., Any]]:
     :class:`~robots.grid_hal.Here` / :class:`~robots.grid_hal.Near`.
     """
 
-    def pose() -> list[float]:
-        """Cells moved since the robot was placed: (d_row, d_col, 0)."""
-        return list(hw.odometry.pose())
-
-    def stop() -> None:
-        """Stay this round."""
-        hw.drive.stop()
-
     def sense() -> dict[str, Any]:
         """What the robot perceives this round."""
         return {
@@ -77,4 +61,24 @@ def grid_procedures(hw: GridHardware) -> dict[str, Callable[..., Any]]:
             "around": [asdict(near) for near in hw.senses.around()],
         }
 
-    return {"robot.pose": pose, "robot.stop": stop, "robot.sense": sense}
+    return {**_pose_and_stop(hw.odometry, hw.drive), "robot.sense": sense}
+
+
+class _Odometry(Protocol):
+    def pose(self) -> tuple[float, float, float]: ...
+
+
+class _Stoppable(Protocol):
+    def stop(self) -> None: ...
+
+
+def _pose_and_stop(odometry: _Odometry, drive: _Stoppable) -> dict[str, Callable[..., Any]]:
+    def pose() -> list[float]:
+        """The robot's dead-reckoned pose (x, y, heading; on a grid: d_row, d_col, 0)."""
+        return list(odometry.pose())
+
+    def stop() -> None:
+        """Stop the motors (on a grid: stay this round)."""
+        drive.stop()
+
+    return {"robot.pose": pose, "robot.stop": stop}

@@ -11,7 +11,7 @@ from typing import Any
 
 from mover.cli import UsageError
 
-from .._common import comma_list
+from .._common import comma_list, runner_parser
 from ._paper import PAPER_T1, PAPER_T2, PAPER_T3
 from ._plots import plot
 from ._report import no_nan, table1, table2, table3
@@ -23,12 +23,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Add the ``foraging`` experiment to ``mover experiment``."""
     from . import __doc__ as doc
 
-    p = sub.add_parser(
-        "foraging",
-        help="Simonin et al. c-marking foraging tables 1-3, Fig. 9",
-        description=doc,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
+    p = runner_parser(sub, "foraging", "Simonin et al. c-marking foraging tables 1-3, Fig. 9", doc)
     p.add_argument(
         "--table",
         choices=TABLES,

@@ -12,7 +12,7 @@ from mover.cli import UsageError
 from robots.explore import EXCHANGES, METHODS
 from sim_hw.grid import MazeFileError, load_maze
 
-from .._common import comma_list
+from .._common import comma_list, runner_parser
 from ._paper import AGENT_COUNTS, PROBABILITIES, SIZE
 from ._report import composite, composite_text, tables
 from ._settings import MazeSettings
@@ -23,12 +23,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Add the ``maze`` experiment runner."""
     from . import __doc__ as doc
 
-    parser = sub.add_parser(
-        "maze",
-        help="CU-LVP and baselines on seeded mazes (Linardakis et al., IV-V)",
-        description=doc,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
+    help = "CU-LVP and baselines on seeded mazes (Linardakis et al., IV-V)"
+    parser = runner_parser(sub, "maze", help, doc)
     parser.add_argument("--runs", type=int, default=100, help="mazes per cell (default 100)")
     parser.add_argument(
         "--hedac-runs",

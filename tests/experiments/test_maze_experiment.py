@@ -19,18 +19,12 @@ def _parse(*argv: str) -> argparse.Namespace:
     return parser.parse_args(["maze", *argv])
 
 
+SMALL = ("--runs", "2", "--seed", "5", "--agents", "1,3", "--size", "12", "--methods", "cu-lvp,nf")
+
+
 def test_runner_prints_tables_ranking_and_json(tmp_path, capsys) -> None:
     args = _parse(
-        "--runs",
-        "2",
-        "--seed",
-        "5",
-        "--agents",
-        "1,3",
-        "--size",
-        "12",
-        "--methods",
-        "cu-lvp,nf",
+        *SMALL,
         "--out",
         str(tmp_path),
         "--json",
@@ -46,16 +40,7 @@ def test_runner_prints_tables_ranking_and_json(tmp_path, capsys) -> None:
     assert (tmp_path / "maze_metrics.png").stat().st_size > 0
     assert (tmp_path / "maze_composite.png").exists()
     again = _parse(
-        "--runs",
-        "2",
-        "--seed",
-        "5",
-        "--agents",
-        "1,3",
-        "--size",
-        "12",
-        "--methods",
-        "cu-lvp,nf",
+        *SMALL,
         "--no-plots",
         "--json",
     )
