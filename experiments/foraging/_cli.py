@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from mover.cli import UsageError
+from robots.foraging import TRAIL_COLOURS
 
 from .._common import comma_list, runner_parser
 from ._paper import PAPER_T1, PAPER_T2, PAPER_T3
@@ -78,6 +79,25 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         action="store_true",
         help="c-marking variant: colour only cells moved into, not the source cell",
     )
+    p.add_argument(
+        "--trail-colours",
+        choices=TRAIL_COLOURS,
+        default="single",
+        help="c-marking reading: one trail colour (single, default) or one colour per trail, "
+        "so that removing a trail leaves the trails merged with it whole",
+    )
+    p.add_argument(
+        "--climb-any",
+        action="store_true",
+        help="c-marking variant: climb the highest coloured new neighbour, up or not (the letter)",
+    )
+    p.add_argument(
+        "--agent-seeds",
+        type=int,
+        default=1,
+        help="agent seeds per environment (common random numbers; the SE is then over "
+        "environments); default 1",
+    )
     p.add_argument("--json", action="store_true", help="end with one JSON line of every mean")
     p.add_argument("--out", default="out", help="directory for the PNG plots (out/)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -95,6 +115,11 @@ def settings(args: argparse.Namespace) -> ForagingSettings:
         raise UsageError("--agents must be positive and --sizes at least 5 (20 resources)")
     if args.max_iterations < 1:
         raise UsageError("--max-iterations must be positive")
+    if args.agent_seeds < 1:
+        raise UsageError("--agent-seeds must be positive")
+    if args.trail_colours == "per-trail" and args.colour_on_move:
+        raise UsageError("--trail-colours per-trail needs the source cell coloured: "
+                         "not with --colour-on-move")  # fmt: skip
     return ForagingSettings(
         seed=args.seed,
         table=args.table,
@@ -108,6 +133,9 @@ def settings(args: argparse.Namespace) -> ForagingSettings:
         literal=args.literal,
         forget_at_base=args.forget_at_base,
         colour_on_move=args.colour_on_move,
+        trail_colours=args.trail_colours,
+        climb_any=args.climb_any,
+        agent_seeds=args.agent_seeds,
         out=Path(args.out),
         quiet=args.quiet,
         json=args.json,
@@ -119,12 +147,13 @@ def run(args: argparse.Namespace) -> int:
     s = settings(args)
     out: dict[str, Any] = {"seed": s.seed, "runs": s.runs or "auto", "until": s.until,
                  "literal": s.literal, "forget_at_base": s.forget_at_base,
-                 "colour_on_move": s.colour_on_move}  # fmt: skip
+                 "colour_on_move": s.colour_on_move} | s.reading  # fmt: skip
     t0 = time.perf_counter()
     steps = 0
+    reading = "".join(f", {k} {v}" for k, v in s.reading.items())
     print(
         f"foraging experiment: seed {s.seed}, runs "
-        f"{s.runs or f'auto (SE <= 5 % of the mean, {s.min_runs}..{s.max_runs})'}"
+        f"{s.runs or f'auto (SE <= 5 % of the mean, {s.min_runs}..{s.max_runs})'}{reading}"
     )
     plots = []
     for t in s.tables:

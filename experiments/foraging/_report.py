@@ -25,11 +25,25 @@ def cell(row: Row) -> str:
 def runs(row: Row) -> str:
     """How many runs a row holds, its relative standard error, and its unfinished runs."""
     miss = f" +{row.unfinished} unfinished" if row.unfinished else ""
-    return f"{row.n:5d} runs, se {100 * row.stats.rel_se:4.1f}%{miss}"
+    count = f"{row.n:5d} runs" if row.draws == 1 else f"{row.envs:5d} envs x {row.draws} seeds"
+    return f"{count}, se {100 * row.rel_se:4.1f}%{miss}"
 
 
 def _means(keys: list[int], rows: list[Row]) -> dict[str, float]:
     return {str(k): round(r.mean, 1) for k, r in zip(keys, rows, strict=True)}
+
+
+def _draws(name: str, keys: list[int], rows: list[Row]) -> Figures:
+    """With several agent seeds per environment: each row's standard error (over environments)
+    and the mean of each agent seed alone, so that one can see how far one draw goes."""
+    if not rows or rows[0].draws == 1:
+        return {}
+    se = {str(k): round(r.rel_se * r.mean, 1) for k, r in zip(keys, rows, strict=True)}
+    by = {
+        str(k): [round(float(sum(v) / len(v)), 1) if v else None for v in r.by_draw]
+        for k, r in zip(keys, rows, strict=True)
+    }
+    return {f"{name}_se": se, f"{name}_draws": by}
 
 
 def table1(counts: list[int], rows: list[Row], seed: int) -> tuple[str, Figures]:
@@ -46,7 +60,8 @@ def table1(counts: list[int], rows: list[Row], seed: int) -> tuple[str, Figures]
             f"{row.mean / pm:10.2f} | {runs(row)}"
         )
     std = {str(n): round(r.stats.sd, 1) for n, r in zip(counts, rows, strict=True)}
-    return "\n".join(lines), {"table1": _means(counts, rows), "table1_std": std}
+    figures = {"table1": _means(counts, rows), "table1_std": std}
+    return "\n".join(lines), figures | _draws("table1", counts, rows)
 
 
 def table2(counts: list[int], rows: list[Row], seed: int) -> tuple[str, Figures]:
@@ -64,7 +79,7 @@ def table2(counts: list[int], rows: list[Row], seed: int) -> tuple[str, Figures]
             f"{n:>6} | {pe:9.1f} {pp:7.1f} {pp - pe:8.1f} | {row.mean:9.1f} {proj:8.1f} "
             f"{proj - row.mean:8.1f} {100 * (proj - row.mean) / proj:6.1f} | {runs(row)}"
         )
-    return "\n".join(lines), {"table2": _means(counts, rows)}
+    return "\n".join(lines), {"table2": _means(counts, rows)} | _draws("table2", counts, rows)
 
 
 def table3(sizes: list[int], rows: dict[str, list[Row]], seed: int) -> tuple[str, Figures]:
@@ -82,7 +97,7 @@ def table3(sizes: list[int], rows: dict[str, list[Row]], seed: int) -> tuple[str
         ro = f"{row.mean / prev_o:5.2f}" if prev_o else "     "
         lines.append(f"{f'{s}x{s}':>8} | {p:7.1f} {rp} | {cell(row)} {ro} | {runs(row)}")
         prev_p, prev_o = p, row.mean
-    figures: Figures = {"table3": _means(sizes, cm)}
+    figures: Figures = {"table3": _means(sizes, cm)} | _draws("table3", sizes, cm)
     if "ants" in rows:
         lines.append(
             f"\nFigure 9 — c-marking vs ants, Setup 3; gap = (ants - c-marking) / ants; paper's "

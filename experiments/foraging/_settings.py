@@ -17,7 +17,9 @@ class ForagingSettings:
     ``runs`` fixes the runs per row; None: adaptive, until the standard error is at most
     :data:`TARGET_SE` of the mean, with ``min_runs`` to ``max_runs`` runs. ``agents`` and
     ``sizes`` replace the paper's agent counts (tables 1, 2) and sides (table 3, ants). The
-    c-marking variants are ``literal``, ``forget_at_base`` and ``colour_on_move``.
+    c-marking variants are ``literal``, ``forget_at_base``, ``colour_on_move``, ``climb_any``
+    and ``trail_colours`` ("single" or "per-trail"). ``agent_seeds`` runs every environment with
+    that many agent seeds (the standard error is then over environments).
     """
 
     seed: int = 2007
@@ -32,9 +34,25 @@ class ForagingSettings:
     literal: bool = False
     forget_at_base: bool = False
     colour_on_move: bool = False
+    trail_colours: str = "single"
+    climb_any: bool = False
+    agent_seeds: int = 1
     out: Path = Path("out")
     quiet: bool = False
     json: bool = False
+
+    @property
+    def reading(self) -> dict[str, object]:
+        """The settings beyond the first ones a report names, where they are not the default
+        (so that a default run prints and dumps what it always did)."""
+        extra: dict[str, object] = {}
+        if self.trail_colours != "single":
+            extra["trail_colours"] = self.trail_colours
+        if self.climb_any:
+            extra["climb_any"] = True
+        if self.agent_seeds != 1:
+            extra["agent_seeds"] = self.agent_seeds
+        return extra
 
     @property
     def tables(self) -> list[str]:

@@ -50,9 +50,11 @@ class Trial:
 def run_trial(
     setup: Setup, n_agents: int, kind: str, env_seed: Sequence[int], agent_seed: Sequence[int],
     max_iterations: int, until: str = "exhausted", literal: bool = False,
-    forget_at_base: bool = False, colour_source: bool = True,
+    forget_at_base: bool = False, colour_source: bool = True, trail_colours: str = "single",
+    climb_any: bool = False,
 ) -> Trial:  # fmt: skip
-    """One seeded foraging run; ``kind`` is "cmarking" or "ants"."""
+    """One seeded foraging run; ``kind`` is "cmarking" or "ants". Agent i of a per-trail team
+    takes ident i (its own trail colours)."""
     env = np.random.default_rng(np.random.SeedSequence(list(env_seed)))
     grid, base = environment(setup, env)
     res = place_resources(grid, setup.n_resources, setup.quantity, env, exclude=(base,))
@@ -65,8 +67,11 @@ def run_trial(
     else:
         world = GridWorld(grid, base, res, n_agents)
         agents = [
-            CMarkingAgent(r, setup.q_max, not literal, forget_at_base, colour_source) for r in rngs
-        ]
+            CMarkingAgent(r, setup.q_max, not literal, forget_at_base, colour_source,
+                          trail_colours=trail_colours, climb_any=climb_any, ident=i,
+                          team=n_agents)
+            for i, r in enumerate(rngs)
+        ]  # fmt: skip
     step = world.step
 
     def done() -> bool:
@@ -79,13 +84,22 @@ def run_trial(
 
 @dataclass
 class Row:
-    """Measurements of one table row: the iterations of its finished runs."""
+    """Measurements of one table row: the iterations of its finished runs.
+
+    With ``draws`` > 1 each environment is run with that many agent seeds (common random
+    numbers): ``values`` holds every finished run, ``env_means`` the mean of each environment's
+    finished runs, and the standard error is over environments, the independent unit.
+    """
 
     label: str
     values: list[int] = field(default_factory=list)
     unfinished: int = 0
     agent_steps: int = 0
     seconds: float = 0.0
+    draws: int = 1
+    env_means: list[float] = field(default_factory=list)
+    #: by_draw[j]: the finished runs of agent seed j, one per environment.
+    by_draw: list[list[int]] = field(default_factory=list)
 
     @property
     def stats(self) -> Summary:
@@ -102,25 +116,43 @@ class Row:
         """Mean iterations of the finished runs (nan without any)."""
         return self.stats.mean
 
+    @property
+    def rel_se(self) -> float:
+        """The standard error of the mean as a share of it: over runs, or over environments
+        when each environment has several agent seeds."""
+        return summary(self.env_means).rel_se if self.draws > 1 else self.stats.rel_se
 
-def measure(label: str, one: Callable[[int], Trial], s: ForagingSettings) -> Row:
-    """Run ``one(run_index)`` for ``s.runs`` runs, or until the SE is ≤ 5 % of the mean."""
-    row = Row(label)
+    @property
+    def envs(self) -> int:
+        """Environments with at least one finished run."""
+        return len(self.env_means) if self.draws > 1 else self.n
+
+
+def measure(label: str, one: Callable[[int, int], Trial], s: ForagingSettings) -> Row:
+    """Run ``one(run_index, draw)`` for ``s.runs`` environments and ``s.agent_seeds`` draws
+    each, or until the SE is ≤ 5 % of the mean."""
+    row = Row(label, draws=s.agent_seeds, by_draw=[[] for _ in range(s.agent_seeds)])
     fixed = s.runs is not None
     total = s.runs if s.runs is not None else s.max_runs
     bar = Progress(total, label, width=24, enabled=not s.quiet)
     t0 = time.perf_counter()
     k = 0
     while k < total:
-        if not fixed and row.n >= s.min_runs and row.stats.rel_se <= TARGET_SE:
+        if not fixed and row.envs >= s.min_runs and row.rel_se <= TARGET_SE:
             break
-        trial = one(k)
+        done: list[int] = []
+        for j in range(s.agent_seeds):
+            trial = one(k, j)
+            row.agent_steps += trial.agent_steps
+            if trial.finished:
+                row.values.append(trial.iterations)
+                row.by_draw[j].append(trial.iterations)
+                done.append(trial.iterations)
+            else:
+                row.unfinished += 1
+        if done:
+            row.env_means.append(sum(done) / len(done))
         k += 1
-        row.agent_steps += trial.agent_steps
-        if trial.finished:
-            row.values.append(trial.iterations)
-        else:
-            row.unfinished += 1
         bar.update(k, _status(row, time.perf_counter() - t0))
     row.seconds = time.perf_counter() - t0
     bar.close(k, _status(row, row.seconds))
@@ -129,24 +161,25 @@ def measure(label: str, one: Callable[[int], Trial], s: ForagingSettings) -> Row
 
 def _status(row: Row, seconds: float) -> str:
     st = row.stats
-    se = f"{100 * st.rel_se:5.1f}%" if st.n > 1 else "   -  "
+    se = f"{100 * row.rel_se:5.1f}%" if row.envs > 1 else "   -  "
     rate = row.agent_steps / max(seconds, 1e-9)
     return f"se {se}  mean {st.mean:8.1f}  {rate / 1e3:6.1f}k agent-steps/s"
 
 
 def runner(
     s: ForagingSettings, setup: Setup, n: int, kind: str, table: int, variant: int
-) -> Callable[[int], Trial]:
-    """Run k of a row. The environment seed is (seed, table, k) — the same for every row of a
-    table (common random numbers) — and the agents' seed adds the row and the kind."""
+) -> Callable[[int, int], Trial]:
+    """Run k, agent seed j, of a row. The environment seed is (seed, table, k) — the same for
+    every row of a table (common random numbers) — and the agents' seed adds the row and the
+    kind, and j when j > 0 (draw 0 is the seed of a single-draw run)."""
     code = 0 if kind == "cmarking" else 1
 
-    def one(k: int) -> Trial:
+    def one(k: int, j: int = 0) -> Trial:
         env_seed = (s.seed, table, k)
-        agent_seed = (s.seed, table, k, variant, code)
+        agent_seed = (s.seed, table, k, variant, code, *((j,) if j else ()))
         return run_trial(
             setup, n, kind, env_seed, agent_seed, s.max_iterations, s.until, s.literal,
-            s.forget_at_base, not s.colour_on_move,
+            s.forget_at_base, not s.colour_on_move, s.trail_colours, s.climb_any,
         )  # fmt: skip
 
     return one

@@ -12,7 +12,7 @@ stands on and perceives the 4 neighbours — no map, no global position:
 """
 
 from robots.foraging._ants import AntAgent, compass_move
-from robots.foraging._cmarking import CMarkingAgent, Task
+from robots.foraging._cmarking import TRAIL_COLOURS, CMarkingAgent, Task, ending
 from robots.foraging._marking import (
     ForagingMarkingAgent,
     MarkingAgent,
@@ -44,6 +44,7 @@ __all__ = [
     "OFFSETS",
     "SOUTH",
     "TRAIL",
+    "TRAIL_COLOURS",
     "UNMARKED",
     "WEST",
     "Action",
@@ -58,6 +59,7 @@ __all__ = [
     "Task",
     "compass_move",
     "descend",
+    "ending",
     "explore",
     "opposite",
     "update_value",

@@ -38,6 +38,26 @@ Choices the paper leaves open, taken here:
   colouring lower down, or when removing one of two merged trails cuts the other; with the
   literal algorithm such a stale trail is an attractor that exploring agents keep climbing back
   to, and whole teams end up circling in a pocket beside it (seen in Setup 1 runs).
+  ``climb_any=True`` takes the letter ("move to highest-valued such cell", up or not).
+
+One trail colour or one colour per trail (``trail_colours``). The paper gives agents "a
+distinctive trail colour", and the remover moves to "a new neighbouring cell that has the same
+colour as the trail"; with a single colour (the default, :data:`TRAIL`) two trails that merged
+share their cells, and removing one cuts the other below the source it still leads to.
+``"per-trail"`` gives each trail its own colour: a cell's colour is the set of trails through it,
+one bit each (an int, ``NO_COLOUR`` the empty set), and an agent that creates a trail takes a
+fresh bit, ``ident + team * k`` for its k-th trail, so no two agents of a team of ``team`` ever
+take the same one. Which trails are a cell's own, those that *end* there, is read off the floor:
+the bits of the cell carried by at most one neighbour (a trail passing through has two). Then
+
+* LOADING's "is the cell coloured (part of a trail)" means "a trail ends here": a source only
+  passed by another source's trail gets a trail of its own;
+* RETURN & REMOVE TRAIL (and the dead-end removal) erases only the trails ending where it starts,
+  following and clearing their bits; the other trails through the same cells stay whole;
+* SEARCH & CLIMB TRAIL climbs a cell of any trail ("neighbouring cells are coloured").
+
+This needs the source cell coloured (``colour_source``). With one colour the bit is
+:data:`TRAIL` and every rule above reduces to the single-colour ones, step for step.
 """
 
 from __future__ import annotations
@@ -60,8 +80,27 @@ class Task(enum.IntEnum):
     REMOVE = 3  # RETURN & REMOVE TRAIL
 
 
+#: The trail-colour readings: one colour for every trail, or one colour per trail.
+TRAIL_COLOURS = ("single", "per-trail")
+
+
+def ending(colour: int, neighbours: tuple[Neighbour, ...]) -> int:
+    """The trails of ``colour`` (a set of bits) that end on this cell: those carried by at most
+    one of its ``neighbours`` (a trail passing through is carried by two)."""
+    once = twice = 0
+    for n in neighbours:
+        c = n.colour & colour
+        twice |= once & c
+        once |= c
+    return colour & ~twice
+
+
 class CMarkingAgent:
-    """A colour-marking foraging agent (Simonin et al., Algorithm 4)."""
+    """A colour-marking foraging agent (Simonin et al., Algorithm 4).
+
+    ``ident`` (0 to ``team - 1``) and ``team`` only serve ``trail_colours="per-trail"``, to
+    draw colours no teammate draws.
+    """
 
     def __init__(
         self,
@@ -70,7 +109,18 @@ class CMarkingAgent:
         remove_dead_ends: bool = True,
         forget_at_base: bool = False,
         colour_source: bool = True,
+        *,
+        trail_colours: str = "single",
+        climb_any: bool = False,
+        ident: int = 0,
+        team: int = 1,
     ) -> None:
+        if trail_colours not in TRAIL_COLOURS:
+            raise ValueError(f"trail_colours {trail_colours!r}: one of {', '.join(TRAIL_COLOURS)}")
+        if trail_colours == "per-trail" and not colour_source:
+            raise ValueError("per-trail colours need the source cell coloured (colour_source)")
+        if not 0 <= ident < team:
+            raise ValueError(f"ident {ident} is not in 0..{team - 1}")
         self._dice = Dice(rng)
         self.q_max = q_max
         #: Erase a trail found to end without a resource (see the module docstring).
@@ -79,6 +129,14 @@ class CMarkingAgent:
         self.forget_at_base = forget_at_base
         #: Also colour the resource cell itself when creating a trail (see the module docstring).
         self.colour_source = colour_source
+        #: One colour per trail, as bits of the cell's colour (see the module docstring).
+        self.per_trail = trail_colours == "per-trail"
+        #: Climb any coloured new neighbour, not only a higher one (the letter of Algorithm 4).
+        self.climb_any = climb_any
+        self.ident, self.team = ident, team
+        self._made = 0  # trails created so far (per-trail colours)
+        #: The trail bits being coloured (COLOUR) or erased (REMOVE).
+        self.trail = TRAIL
         self.task = Task.SEARCH
         self.load = 0
         #: Direction of the previous cell, as seen from the current one (None at start).
@@ -97,9 +155,15 @@ class CMarkingAgent:
             load = min(self.q_max, p.resource)
             self.load = load
             if p.resource - load > 0:
-                task = Task.RETURN if p.colour == TRAIL else Task.COLOUR
+                if self._own_trails(p):  # "the cell is coloured (it is part of a trail)"
+                    task = Task.RETURN
+                else:
+                    task = Task.COLOUR
+                    self.trail = self._new_colour()
             else:
                 task = Task.REMOVE
+                # one colour: follow any trail down, even from an uncoloured source cell
+                self.trail = self._own_trails(p) if self.per_trail else TRAIL
                 self.came_from = None  # "new" cells: the way in is the trail to erase
         elif task != Task.SEARCH and p.at_base:
             unload = True  # at the base: unload and execute SEARCH & CLIMB
@@ -108,20 +172,24 @@ class CMarkingAgent:
             if self.forget_at_base:
                 self.came_from = None  # a new search: any trail from the base may be climbed
         dice = self._dice
-        if task == Task.SEARCH and self.remove_dead_ends and self._at_dead_end(p, value):
-            task = Task.REMOVE
-            self.came_from = None  # the way down the trail is the way it came up
+        floor = -1 if self.climb_any else value  # the least value a climb may go to
+        if task == Task.SEARCH and self.remove_dead_ends and self._at_dead_end(p, floor):
+            dead = self._own_trails(p)
+            if dead:
+                task = Task.REMOVE
+                self.trail = dead
+                self.came_from = None  # the way down the trail is the way it came up
         if task == Task.SEARCH:
-            move = self._search(p.neighbours, value, dice)
+            move = self._search(p.neighbours, floor, dice)
         elif task == Task.COLOUR:
             # RETURN & COLOUR TRAIL: "move to ... the least value, colour the cell" — each cell
             # moved into, and the source cell too with colour_source.
             if not loading or self.colour_source:
-                colour = TRAIL
+                colour = p.colour | self.trail
             move = descend(p.neighbours, dice)
         elif task == Task.REMOVE:
-            if p.colour == TRAIL and (not loading or self.colour_source):
-                colour = NO_COLOUR
+            if p.colour & self.trail and (not loading or self.colour_source):
+                colour = p.colour & ~self.trail
             move = self._follow_trail_down(p.neighbours, dice)
             if move is None:
                 task = Task.RETURN
@@ -132,17 +200,32 @@ class CMarkingAgent:
         self.came_from = None if move is None else opposite(move)
         return Action(move, value, colour, load, unload)
 
-    def _search(self, neighbours: tuple[Neighbour, ...], here: int, dice: Dice) -> int | None:
-        """SEARCH & CLIMB TRAIL: resource, else climb to the highest coloured new neighbour above
-        ``here``, else EXPLORATION (Algorithm 2)."""
+    def _new_colour(self) -> int:
+        """The colour of a trail about to be created: :data:`TRAIL`, or a bit of its own."""
+        if not self.per_trail:
+            return TRAIL
+        bit = self.ident + self.team * self._made
+        self._made += 1
+        return 1 << bit
+
+    def _own_trails(self, p: Perception) -> int:
+        """The trails of this cell that a loader or remover here counts as its own: with one
+        colour, the trail colour if the cell has it; per trail, the trails ending here."""
+        if not self.per_trail:
+            return p.colour & TRAIL
+        return ending(p.colour, p.neighbours)
+
+    def _search(self, neighbours: tuple[Neighbour, ...], floor: int, dice: Dice) -> int | None:
+        """SEARCH & CLIMB TRAIL: resource, else climb to the highest coloured new neighbour of
+        value at least ``floor``, else EXPLORATION (Algorithm 2)."""
         move = resource_neighbour(neighbours, dice)
         if move is not None:
             return move
         back = self.came_from
-        best = here  # climbing goes up: only coloured cells higher than this one
+        best = floor  # climbing goes up: only coloured cells higher than this one
         ties: list[Neighbour] = []
         for n in neighbours:
-            if n.colour != TRAIL or n.direction == back:
+            if n.colour == NO_COLOUR or n.direction == back:
                 continue
             if n.value > best:
                 best = n.value
@@ -153,29 +236,32 @@ class CMarkingAgent:
             return dice.choice(ties).direction
         return explore(neighbours, dice)
 
-    def _at_dead_end(self, p: Perception, here: int) -> bool:
+    def _at_dead_end(self, p: Perception, floor: int) -> bool:
         """On a trail cell with no resource here or around and no coloured new neighbour above
-        ``here`` to climb to: the top of a trail that leads nowhere any more."""
-        if p.colour != TRAIL or p.at_base or p.resource > 0:
+        ``floor`` to climb to: the top of a trail that leads nowhere any more."""
+        if p.colour == NO_COLOUR or p.at_base or p.resource > 0:
             return False
         back = self.came_from
         for n in p.neighbours:
-            if n.resource > 0 or (n.colour == TRAIL and n.direction != back and n.value > here):
+            if n.resource > 0:
+                return False
+            if n.colour != NO_COLOUR and n.direction != back and n.value > floor:
                 return False
         return True
 
     def _follow_trail_down(self, neighbours: tuple[Neighbour, ...], dice: Dice) -> int | None:
-        """RETURN & REMOVE TRAIL: the trail-coloured new neighbour of least value, if any.
+        """RETURN & REMOVE TRAIL: the new neighbour of least value that carries the trail being
+        erased (:attr:`trail`), if any.
 
         Not required to be lower than the current cell: values along a trail keep improving after
         it was drawn, and stopping at the first non-monotone step would leave the rest of the
         trail behind. Erasing as it goes, the agent cannot circle on the trail.
         """
-        back = self.came_from
+        back, trail = self.came_from, self.trail
         best = -1
         ties: list[Neighbour] = []
         for n in neighbours:
-            if n.colour != TRAIL or n.direction == back or n.value < 0:
+            if not n.colour & trail or n.direction == back or n.value < 0:
                 continue
             if best < 0 or n.value < best:
                 best = n.value

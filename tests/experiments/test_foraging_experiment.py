@@ -56,6 +56,56 @@ def test_variants_reach_the_agents() -> None:
     assert letter.finished and letter != base
 
 
+def test_per_trail_reading_reaches_the_agents(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    env, seed = (1, 2, 0), (1, 2, 0, 3, 0)
+    base = fx.run_trial(fx.SETUP2, 3, "cmarking", env, seed, 100_000)
+    per = fx.run_trial(fx.SETUP2, 3, "cmarking", env, seed, 100_000, trail_colours="per-trail")
+    climb = fx.run_trial(fx.SETUP2, 3, "cmarking", env, seed, 100_000, trail_colours="per-trail",
+                         climb_any=True)  # fmt: skip
+    assert per.finished and climb.finished and len({base.iterations, per.iterations,
+                                                    climb.iterations}) > 1  # fmt: skip
+    argv = ["--table", "2", "--agents", "2", "--runs", "2", "--json", "--quiet",
+            "--trail-colours", "per-trail", "--out", str(tmp_path)]  # fmt: skip
+    args = parse(argv)
+    args.func(args)
+    out = capsys.readouterr().out
+    assert "trail_colours per-trail" in out.splitlines()[0]
+    assert json.loads(out.strip().splitlines()[-1])["trail_colours"] == "per-trail"
+
+
+def test_default_json_names_no_new_reading(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    args = parse(["--table", "2", "--agents", "2", "--runs", "1", "--json", "--quiet",
+                  "--out", str(tmp_path)])  # fmt: skip
+    args.func(args)
+    last = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert set(last) == {"seed", "runs", "until", "literal", "forget_at_base", "colour_on_move",
+                         "table2"}  # fmt: skip
+
+
+def test_agent_seeds_pair_draws_on_each_environment(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    one = ["--table", "2", "--agents", "1,3", "--runs", "4", "--seed", "5", "--json", "--quiet",
+           "--out", str(tmp_path)]  # fmt: skip
+    args = parse(one)
+    args.func(args)
+    single = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    args = parse([*one, "--agent-seeds", "3"])
+    args.func(args)
+    out = capsys.readouterr().out
+    multi = json.loads(out.strip().splitlines()[-1])
+    assert "4 envs x 3 seeds" in out and multi["agent_seeds"] == 3
+    draws = multi["table2_draws"]
+    assert [len(draws[k]) for k in ("1", "3")] == [3, 3]
+    assert [draws[k][0] for k in ("1", "3")] == [single["table2"][k] for k in ("1", "3")]
+    assert abs(multi["table2"]["1"] - sum(draws["1"]) / 3) < 0.1  # every run finished
+    assert multi["table2_se"]["1"] > 0
+
+
 @pytest.mark.parametrize(
     ("argv", "problem"),
     [
@@ -64,6 +114,8 @@ def test_variants_reach_the_agents() -> None:
         (["--agents", "0,2"], "--agents must be positive"),
         (["--sizes", "3"], "--sizes at least 5"),
         (["--max-iterations", "0"], "--max-iterations must be positive"),
+        (["--agent-seeds", "0"], "--agent-seeds must be positive"),
+        (["--trail-colours", "per-trail", "--colour-on-move"], "not with --colour-on-move"),
     ],
 )
 def test_usage_errors(argv: list[str], problem: str) -> None:

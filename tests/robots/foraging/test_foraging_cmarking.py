@@ -1,10 +1,20 @@
-"""C-marking agents (Simonin et al., Algorithm 4): trails are created, climbed and removed."""
+"""C-marking agents (Simonin et al., Algorithm 4): trails are created, climbed and removed, with
+one trail colour or one colour per trail."""
 
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
-from robots.foraging import NO_COLOUR, TRAIL, CMarkingAgent, Neighbour, Perception, Task
+from robots.foraging import (
+    NO_COLOUR,
+    TRAIL,
+    CMarkingAgent,
+    Neighbour,
+    Perception,
+    Task,
+    ending,
+)
 from sim_hw.grid import Grid, GridWorld, place_resources, random_obstacles
 from tests.robots.foraging.test_foraging_marking import lemma_4_1_holds
 
@@ -117,3 +127,89 @@ def test_team_forages_with_trails_and_keeps_lemma_4_1() -> None:
         seen_trail = seen_trail or bool(trail_cells(world))
         assert lemma_4_1_holds(world.marks_array(), grid, base)  # trails leave the field intact
     assert world.exhausted and seen_trail
+
+
+# -- one colour per trail ---------------------------------------------------------------------
+A_BIT, B_BIT = 1, 2  # trail colours: the first trail of agents 0 and 1 of a team of 2
+
+
+def test_ending_is_the_trails_carried_by_at_most_one_neighbour() -> None:
+    nbrs = tuple(Neighbour(d, 3, c, 0, False) for d, c in enumerate((A_BIT | B_BIT, B_BIT, 0)))
+    assert ending(A_BIT | B_BIT, nbrs) == A_BIT  # B passes through, A ends here
+    assert ending(NO_COLOUR, nbrs) == NO_COLOUR
+
+
+def test_per_trail_loading_creates_a_trail_of_its_own_beside_a_passing_one() -> None:
+    a = agent(0, trail_colours="per-trail", ident=1, team=2)
+    # a source crossed by trail A (carried by two neighbours): not the end of any trail
+    act = a.step(perception(6, A_BIT, 500, (0, 5, A_BIT, 0), (2, 7, A_BIT, 0)))
+    assert (a.task, act.colour) == (Task.COLOUR, A_BIT | B_BIT)  # its own bit added
+    assert a.step(perception(5, A_BIT, 0, (0, 4, A_BIT, 0))).colour == A_BIT | B_BIT
+    second = agent(1, trail_colours="per-trail", ident=0, team=2)
+    act = second.step(perception(6, A_BIT | B_BIT, 500, (0, 5, A_BIT | B_BIT, 0),
+                                 (2, 7, A_BIT, 0)))  # fmt: skip
+    assert (second.task, act.colour) == (Task.RETURN, None)  # trail B ends here: descend
+    assert agent(2, trail_colours="per-trail", ident=1, team=2)._new_colour() == B_BIT
+    with pytest.raises(ValueError, match="colour_source"):
+        agent(trail_colours="per-trail", colour_source=False)
+    with pytest.raises(ValueError, match="ident"):
+        agent(trail_colours="per-trail", ident=2, team=2)
+
+
+def merged_trails(colour_a: int, colour_b: int) -> tuple[GridWorld, list[tuple[int, int]]]:
+    """Two trails that merge two cells before the base; the remover stands on source A.
+
+    ::
+
+        . . B      row 0: B at (0, 4), its trail (0, 3), (0, 2), (1, 2), (2, 2), (2, 1)
+        # . # #    row 1
+        . . . A    row 2: base (2, 0), A at (2, 4), its trail (2, 3), (2, 2), (2, 1)
+    """
+    grid = Grid(np.array([[1, 1, 0, 0, 0], [1, 1, 0, 1, 1], [0, 0, 0, 0, 0]], dtype=bool))
+    base, a_src, b_src = (2, 0), (2, 4), (0, 4)
+    world = GridWorld(grid, base, {a_src: 100, b_src: 1000}, starts=[a_src])
+    world.marks = [int(v) if v >= 0 else -1 for v in grid.distances(base).ravel()]
+    trail_b = [b_src, (0, 3), (0, 2), (1, 2), (2, 2), (2, 1)]
+    for c in trail_b:
+        world.colours[grid.index(c)] |= colour_b
+    for c in [a_src, (2, 3), (2, 2), (2, 1)]:
+        world.colours[grid.index(c)] |= colour_a
+    return world, trail_b
+
+
+def test_per_trail_removal_leaves_a_merged_trail_whole() -> None:
+    world, trail_b = merged_trails(A_BIT, B_BIT)
+    remover = agent(0, trail_colours="per-trail", ident=0, team=2)
+    world.step([remover])  # loads the last 100 units: RETURN & REMOVE TRAIL of A only
+    assert remover.task == Task.REMOVE and remover.trail == A_BIT
+    while world.agent_cell(0) != (2, 0):
+        world.step([remover])
+    colours = {world.grid.cell(i): c for i, c in enumerate(world.colours) if c}
+    assert colours == {c: B_BIT for c in trail_b}  # A erased, B whole from its source down
+
+
+def test_single_colour_removal_cuts_a_merged_trail() -> None:
+    world, trail_b = merged_trails(TRAIL, TRAIL)
+    remover = agent(0)
+    while world.agent_cell(0) != (2, 0) or world.iteration == 0:
+        world.step([remover])
+    left = {world.grid.cell(i) for i, c in enumerate(world.colours) if c}
+    assert left == set(trail_b[:4])  # B's trail now ends two cells short of the base
+
+
+def test_per_trail_team_forages_and_keeps_lemma_4_1() -> None:
+    base = (15, 15)
+    grid = random_obstacles(31, 31, 0.05, 8, keep_free=(base,))
+    res = place_resources(grid, 8, 500, 9, exclude=(base,))
+    world = GridWorld(grid, base, res, 10)
+    agents = [
+        CMarkingAgent(r, trail_colours="per-trail", ident=i, team=10)
+        for i, r in enumerate(np.random.default_rng(10).spawn(10))
+    ]
+    bits = 0
+    while not world.exhausted and world.iteration < 50_000:
+        world.step(agents)
+        for c in world.colours:
+            bits |= c
+        assert lemma_4_1_holds(world.marks_array(), grid, base)
+    assert world.exhausted and bin(bits).count("1") >= 2  # several trails, each its own colour
