@@ -206,8 +206,9 @@ class Membership:
         def on_done(_: Any) -> None:
             if state["ok"] or name not in self._tokens:
                 return
-            if not state["refused"] and attempt < _HELLO_RETRIES:
-                # No answer (an overloaded machine, a link still coming up): ask again later.
+            if attempt < _HELLO_RETRIES:
+                # No authentic answer (an overloaded machine, a link still coming up, or only
+                # a stranger's answer on the member's key): ask again later.
                 delay = min(0.2 * 2**attempt, 3.0)
                 asyncio.get_running_loop().call_later(delay, self._ask_hello, name, attempt + 1)
             else:
@@ -222,6 +223,7 @@ class Membership:
             _keys.hello(node.team_name, name),
             node._portal.callback(on_reply, on_done),
             payload=challenge,
+            target=zenoh.QueryTarget.ALL,  # a stranger's queryable cannot take it (see _rpc)
             consolidation=zenoh.ConsolidationMode.NONE,
             timeout=5.0,
         )

@@ -368,7 +368,7 @@ class Node:
             self.stats["refused"] += 1
             self._refusal_log.warn("ctl", f"dropped a control message: {exc}")
             return
-        if env.kind == "cancel" and isinstance(env.payload, int):
+        if env.kind == "cancel" and env.recipient == self.name and isinstance(env.payload, int):
             self._server.cancel(env.sender, env.payload)
 
     def _member_left(self, name: str) -> None:

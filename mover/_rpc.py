@@ -33,7 +33,7 @@ from ._exceptions import (
     WireError,
 )
 from ._signature import Signature
-from ._wire import Envelope, read_refusal, refusal
+from ._wire import Envelope, EnvelopeRefused, read_refusal, refusal
 
 if TYPE_CHECKING:
     from ._node import Node
@@ -100,10 +100,16 @@ class RpcServer:
         try:
             env = node._opener.open(frame)
             if env.kind != "call":
-                raise WireError(f"a {env.kind!r} envelope is not a call")
+                raise EnvelopeRefused(f"a {env.kind!r} envelope is not a call", env)
+            if env.recipient != node.name:
+                raise EnvelopeRefused(f"a call for {env.recipient!r}, not for {node.name!r}", env)
         except WireError as exc:
             node.stats["refused"] += 1
             node._refusal_log.warn("rpc", f"refused a call: {exc}")
+            if isinstance(exc, EnvelopeRefused) and exc.envelope.kind == "call":
+                # authentic but refused: a sealed answer its sender can believe
+                self._send(query, exc.envelope, _err("Refused", str(exc)))
+                return
             with query:
                 if node.on_refused == "reply":
                     query.reply(_keys.rpc(node.team_name, node.name), refusal(str(exc)))
@@ -193,11 +199,10 @@ class RpcServer:
         node = self.node
         with query:
             try:
-                frame = node._sealer.seal("reply", reply, env.call_id)
+                frame = node._sealer.seal("reply", reply, env.call_id, to=env.sender)
             except WireError as exc:
-                frame = node._sealer.seal(
-                    "reply", _err("WireError", f"cannot send the result: {exc}"), env.call_id
-                )
+                failed = _err("WireError", f"cannot send the result: {exc}")
+                frame = node._sealer.seal("reply", failed, env.call_id, to=env.sender)
             try:
                 query.reply(_keys.rpc(node.team_name, node.name), frame, express=True)
                 node.stats["sent.reply"] += 1
@@ -244,18 +249,21 @@ class RpcClient:
         _keys.check_name("robot", robot)
         self._next_id += 1
         call_id = self._next_id
-        frame = node._sealer.seal("call", [procedure, list(args), kwargs], call_id)
+        frame = node._sealer.seal("call", [procedure, list(args), kwargs], call_id, to=robot)
         future: asyncio.Future[Any] = asyncio.get_running_loop().create_future()
         member = robot in node.team
         self.pending[call_id] = _Pending(robot, procedure, future, member)
-        # For a member, liveliness tells when it is lost; only a call to a stranger needs to
-        # hear that the query ended unanswered (no such robot), which costs a loop wake-up.
-        on_done = None if member else partial(self._on_done, call_id)
         try:
+            # Every queryable on the key gets the call (target ALL): one that a stranger
+            # declares there, "complete" or not, cannot take it away from the member, and only
+            # the member's authentic reply counts (see _on_reply).
             node._session.get(
                 _keys.rpc(node.team_name, robot),
-                node._portal.callback(partial(self._on_reply, call_id), on_done),
+                node._portal.callback(
+                    partial(self._on_reply, call_id), partial(self._on_done, call_id)
+                ),
                 payload=frame,
+                target=zenoh.QueryTarget.ALL,
                 consolidation=zenoh.ConsolidationMode.NONE,
                 timeout=(timeout + 1.0) if timeout is not None else _NO_TIMEOUT,
                 express=True,
@@ -266,8 +274,10 @@ class RpcClient:
                     return await future
             except TimeoutError:
                 self._cancel_remote(robot, call_id)
+                said = self.pending[call_id].refusal
+                heard = f" (an unauthenticated refusal said: {said})" if said else ""
                 raise CallTimeout(
-                    f"{procedure!r} on {robot!r} did not answer within {timeout} s",
+                    f"{procedure!r} on {robot!r} did not answer within {timeout} s{heard}",
                     robot=robot,
                     procedure=procedure,
                 ) from None
@@ -282,7 +292,8 @@ class RpcClient:
         node = self.node
         try:
             node._session.put(
-                _keys.ctl(node.team_name, robot), node._sealer.seal("cancel", call_id, call_id)
+                _keys.ctl(node.team_name, robot),
+                node._sealer.seal("cancel", call_id, call_id, to=robot),
             )
             node.stats["sent.cancel"] += 1
         except Exception as exc:
@@ -296,21 +307,28 @@ class RpcClient:
         if sample is None:
             return  # zenoh's own errors (e.g. its timeout): our timers decide
         frame = sample.payload.to_bytes()
+        node = self.node
         reason = read_refusal(frame)
         if reason is not None:
+            # Unsigned: anyone could have sent it. It counts only if nothing authentic comes
+            # before the query ends (_on_done): a caller whose key the callee refused hears why.
             p.refusal = reason
-            if p.was_member:  # no end-of-query notice will come: tell the caller now
-                self._on_done(call_id, None)
+            node.stats["recv.refusal"] += 1
             return
-        node = self.node
         try:
             env = node._opener.open(frame)
-            if env.kind != "reply" or env.sender != p.robot or env.call_id != call_id:
+            if (
+                env.kind != "reply"
+                or env.sender != p.robot
+                or env.call_id != call_id
+                or env.recipient != node.name
+            ):
                 raise WireError("reply does not match the call")
             body = env.payload
             if not isinstance(body, dict):
                 raise WireError("reply body is not a map")
         except WireError as exc:
+            node.stats["refused.reply"] += 1
             node._refusal_log.warn(p.robot, f"dropped a reply from {p.robot!r}: {exc}")
             return
         node.stats["recv.reply"] += 1
@@ -332,6 +350,10 @@ class RpcClient:
     def _on_done(self, call_id: int, _: Any) -> None:
         p = self.pending.get(call_id)
         if p is None or p.future.done():
+            return
+        if p.was_member:
+            # The query ended with no authentic answer (no route for now, or only a stranger
+            # answered): the member's liveliness, or the caller's timeout, decides.
             return
         if p.refusal is not None:
             exc: CallError = Refused(

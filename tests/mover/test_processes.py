@@ -35,7 +35,7 @@ from mover import (
     UnknownProcedure,
     UnknownRobot,
 )
-from mover._wire import Sealer
+from mover._wire import Opener, Sealer
 from tests.helpers.procs import Cluster, cluster
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")
@@ -188,21 +188,37 @@ async def test_outsiders_are_refused(world: tuple[Cluster, Node]) -> None:
 async def test_replayed_envelope_is_refused(world: tuple[Cluster, Node]) -> None:
     c, node = world
     before = await node.call("r2", "bumps", timeout=5)
-    frame = Sealer(c.team.name, "tester", c.team.key).seal("call", ["bump", [], {}], 999_999)
+    sealer = Sealer(c.team.name, "tester", c.team.key)
+    frame = sealer.seal("call", ["bump", [], {}], 999_999, to="r2")
     answers = [await _raw_get(node, "mover/alpha/rpc/r2", frame) for _ in range(2)]
-    assert answers[0][:2] == b"M1"  # a signed reply
-    assert answers[1].startswith(b"MR") and b"replayed" in answers[1]
+    opener = Opener(c.team.name, c.team.key)
+    first, second = (opener.open(a) for a in answers)  # sealed answers, to the tester
+    assert first.recipient == second.recipient == "tester"
+    assert "ok" in first.payload
+    assert second.payload["err"]["type"] == "Refused" and "replayed" in str(second.payload)
     assert await node.call("r2", "bumps", timeout=5) == before + 1
+    # the same call overheard on its way to r2 and sent to r3: refused, r3 runs nothing
+    before3 = await node.call("r3", "bumps", timeout=5)
+    other = opener.open(await _raw_get(node, "mover/alpha/rpc/r3", frame))
+    assert other.payload["err"]["type"] == "Refused" and "not for 'r3'" in str(other.payload)
+    unaddressed = sealer.seal("call", ["bump", [], {}], 1_000_000)  # for no one in particular
+    blank = opener.open(await _raw_get(node, "mover/alpha/rpc/r3", unaddressed))
+    assert blank.payload["err"]["type"] == "Refused"
+    assert await node.call("r3", "bumps", timeout=5) == before3
 
 
 @pytest.mark.parametrize(
     ("frame", "why"),
     [
-        (b"\x93\x01\x02", b"not a signed mover frame"),
-        (b"M1" + b"\xc1\xc1\xc1\xc1" * 4 + b"\x00" * 32, b"bad signature"),
-        (b"M1" + b"\x00" * (5 * 1024 * 1024), b"over the limit"),
+        (b"\x93\x01\x02", b"not a sealed mover frame"),
+        (b"M2\x00\x04" + b"\xc1\xc1\xc1\xc1" * 4 + b"\x00" * 32, b"malformed msgpack"),
+        (
+            Sealer("alpha", "mallory", b"k" * 32).seal("call", ["add", [1, 2], {}], 1, to="r3"),
+            b"bad signature",
+        ),
+        (b"M2" + b"\x00" * (5 * 1024 * 1024), b"over the limit"),
     ],
-    ids=["malformed-msgpack", "forged-signature", "oversized"],
+    ids=["malformed-msgpack", "malformed-header", "forged-signature", "oversized"],
 )
 async def test_bad_frames_get_a_refusal_and_the_robot_keeps_serving(
     world: tuple[Cluster, Node], frame: bytes, why: bytes
@@ -214,12 +230,10 @@ async def test_bad_frames_get_a_refusal_and_the_robot_keeps_serving(
 
 
 async def test_signed_but_malformed_body_is_refused(world: tuple[Cluster, Node]) -> None:
-    import hashlib
-    import hmac
-
     c, node = world
-    body = b"\xc1\xc1garbage"
-    frame = b"M1" + body + hmac.digest(c.team.key, body, hashlib.sha256)
+    frame = Sealer(c.team.name, "tester", c.team.key).seal_packed(
+        "call", b"\xc1\xc1garbage", to="r3"
+    )
     answer = await _raw_get(node, "mover/alpha/rpc/r3", frame)
     assert answer.startswith(b"MR") and b"malformed msgpack" in answer
     assert await node.call("r3", "add", 1, 2, timeout=5) == 3
