@@ -10,12 +10,14 @@ private modules; the command-line helpers shared by every process are in :mod:`m
 
 from ._config import NodeConfig, Team, free_port
 from ._exceptions import (
+    Answered,
     BadArguments,
     CallError,
     CallTimeout,
     MemberLost,
     MoverError,
     NodeClosed,
+    NotDelivered,
     PayloadTooLarge,
     Refused,
     RemoteError,
@@ -34,6 +36,7 @@ from ._wire import pack, unpack
 
 __all__ = [
     "PROGRESS_TOPIC",
+    "Answered",
     "BadArguments",
     "CallError",
     "CallTimeout",
@@ -50,6 +53,7 @@ __all__ = [
     "Node",
     "NodeClosed",
     "NodeConfig",
+    "NotDelivered",
     "OperationFailed",
     "Outcome",
     "PayloadTooLarge",

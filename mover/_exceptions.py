@@ -6,13 +6,15 @@
     ├── WireError                  a frame that does not decode, or a value that cannot be sent
     │   └── PayloadTooLarge        over the node's size limit
     ├── CallError                  a remote call failed (has .robot and .procedure)
-    │   ├── RemoteError            the procedure raised; .remote_type and .message say what
-    │   ├── UnknownProcedure       the robot exports no procedure of that name
-    │   ├── BadArguments           the arguments do not fit the procedure's signature or hints
-    │   ├── CallTimeout            no answer within the timeout (also a TimeoutError)
-    │   ├── RobotLost              the callee left the team (died, hung, cut off) mid-call
-    │   ├── UnknownRobot           no team member of that name answers
-    │   └── Refused                the callee refused the request (authentication, replay)
+    │   ├── Answered               the callee answered, with an error: asking again is futile
+    │   │   ├── RemoteError        the procedure raised; .remote_type and .message say what
+    │   │   ├── UnknownProcedure   the robot exports no procedure of that name
+    │   │   ├── BadArguments       the arguments do not fit the procedure's signature or hints
+    │   │   └── Refused            the callee refused the request (authentication, replay)
+    │   └── NotDelivered           no answer came: the call may be asked again
+    │       ├── CallTimeout        no answer within the timeout (also a TimeoutError)
+    │       ├── RobotLost          the callee left the team (died, hung, cut off) mid-call
+    │       └── UnknownRobot       no team member of that name answers
     ├── MemberLost                 a member of a collective step left before it finished
     └── NodeClosed                 the node was closed while the operation was pending
 
@@ -47,7 +49,15 @@ class CallError(MoverError):
         self.procedure = procedure
 
 
-class RemoteError(CallError):
+class Answered(CallError):
+    """The callee answered the call with an error: asking again would get the same answer."""
+
+
+class NotDelivered(CallError):
+    """No answer came (timeout, callee lost or unknown): the call may be asked again."""
+
+
+class RemoteError(Answered):
     """The remote procedure raised ``remote_type`` with ``message``."""
 
     def __init__(self, remote_type: str, message: str, *, robot: str, procedure: str) -> None:
@@ -60,27 +70,27 @@ class RemoteError(CallError):
         self.message = message
 
 
-class UnknownProcedure(CallError):
+class UnknownProcedure(Answered):
     """The robot does not export a procedure of that name."""
 
 
-class BadArguments(CallError):
+class BadArguments(Answered):
     """The arguments do not fit the procedure's signature or type hints."""
 
 
-class CallTimeout(CallError, TimeoutError):
+class CallTimeout(NotDelivered, TimeoutError):
     """No answer came within the call's timeout."""
 
 
-class RobotLost(CallError):
+class RobotLost(NotDelivered):
     """The callee left the team (process died, hung or was cut off) before answering."""
 
 
-class UnknownRobot(CallError):
+class UnknownRobot(NotDelivered):
     """No member of the team by that name answers."""
 
 
-class Refused(CallError):
+class Refused(Answered):
     """The callee refused the request: bad signature, other team, stale or replayed."""
 
 

@@ -39,7 +39,7 @@ from collections.abc import Awaitable, Callable, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Literal
 
-from ._exceptions import CallError, MemberLost, RemoteError
+from ._exceptions import MemberLost, NotDelivered
 
 if TYPE_CHECKING:
     from ._node import Node
@@ -49,6 +49,7 @@ log = logging.getLogger("mover.tasks")
 Policy = Literal["fail", "survivors"]
 _STEP_MEMORY = 512  # finished steps a designated member remembers (for late re-sends)
 DECIDED_TOPIC = "mover/decided"
+CALL_TIMEOUT = 30.0  # seconds a collective's call waits before it is asked again
 POLL_AFTER = 0.2  # seconds an OR member waits for the announced decision before polling
 
 
@@ -144,10 +145,18 @@ class Collectives:
     async def _listen(self) -> None:
         async for message in self._announcements:
             data = message.data
-            if isinstance(data, list) and len(data) == 3 and isinstance(data[2], list):
-                future = self.heard(str(data[0]), int(data[1]))
-                if not future.done():
-                    future.set_result(data[2])
+            if not (
+                isinstance(data, list)
+                and len(data) == 3
+                and isinstance(data[0], str)
+                and type(data[1]) is int
+                and isinstance(data[2], list)
+            ):  # any decodable frame may come: only a well-formed decision counts
+                self.node._refusal_log.warn(message.sender, "dropped a malformed decision")
+                continue
+            future = self.heard(data[0], data[1])
+            if not future.done():
+                future.set_result(data[2])
 
     def _announce(self, run: str, step: int, state: _Step) -> None:
         """Tell the members the decision: one broadcast, unless every one of them has asked."""
@@ -490,11 +499,13 @@ class TaskTeam:
         metrics.requests += 1
         metrics.messages += 2
         try:
-            return await self.node.call(member, procedure, *args, timeout=None)
-        except RemoteError:
-            raise
-        except CallError as exc:  # lost, unknown, refused: find out why, then try again
+            # Bounded, and the member's liveliness ends it sooner: a poll that times out
+            # is simply asked again (the designated member keeps the step).
+            return await self.node.call(member, procedure, *args, timeout=CALL_TIMEOUT)
+        except NotDelivered as exc:  # lost, unknown, timed out: find out why, then try again
             raise _Retry(str(exc)) from exc
+        # An answered error (UnknownProcedure, BadArguments, Refused, RemoteError) propagates:
+        # the member answers, and asking again would only get the same answer.
 
     async def _recover(self, member: str | Sequence[str]) -> None:
         reachable = await wait_reachable(self.node, member, self.stall_timeout)

@@ -154,3 +154,41 @@ async def test_a_long_or_step_costs_2n_messages(nodes: list[Node]) -> None:
     assert {o.winner for o in outs} == {"n3"}
     total = sum(t.metrics[0].messages for t in ts)
     assert total == 2 * len(nodes)  # n-1 polls and answers, the claim and its answer
+
+
+async def test_a_designated_member_without_collectives_fails_the_step_clearly(
+    nodes: list[Node],
+) -> None:
+    """An answered error (here UnknownProcedure) is not retried: the step fails at once."""
+    from mover import UnknownProcedure
+
+    plain, member = nodes[0], nodes[1]  # the first by name is designated, and serves nothing
+    team = TaskTeam(member, "r", [plain.name, member.name])
+    before = plain.stats["recv.call"]
+
+    async def op() -> str:
+        return "done"
+
+    with pytest.raises(UnknownProcedure, match=r"mover\.or_claim"):
+        await asyncio.wait_for(team.distributed_or(op), 10)
+    assert plain.stats["recv.call"] - before <= 2  # a claim (and a poll), never a spin
+
+
+async def test_a_malformed_decision_leaves_every_listener_alive(nodes: list[Node]) -> None:
+    from mover._tasks import DECIDED_TOPIC
+
+    members, sender = nodes[:4], nodes[4]
+    ts = teams(members)
+    await asyncio.sleep(0.2)  # the listeners' subscriptions reach the sender
+    for bad in (["r", "1", []], ["r", 1.5, []], [1, 1, []], ["r", 1, "x"], "junk", None, {}):
+        sender.broadcast_nowait(DECIDED_TOPIC, bad, reliable=True)
+    await asyncio.sleep(0.3)
+    assert all(not t.collectives._listener.done() for t in ts)
+
+    async def op() -> str:
+        await asyncio.sleep(0.05)
+        return "ok"
+
+    outcomes = await asyncio.wait_for(asyncio.gather(*(t.distributed_or(op) for t in ts)), 10)
+    assert len({o.winner for o in outcomes}) == 1
+    assert all(not t.collectives._listener.done() for t in ts)
