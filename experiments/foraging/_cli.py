@@ -13,6 +13,7 @@ from mover.cli import UsageError
 from robots.foraging import TRAIL_COLOURS
 
 from .._common import comma_list, runner_parser
+from ._model import load_times, model_rows, paper_times, pooled, report
 from ._paper import PAPER_T1, PAPER_T2, PAPER_T3
 from ._plots import plot
 from ._report import no_nan, table1, table2, table3
@@ -29,7 +30,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "--table",
         choices=TABLES,
         default="all",
-        help="which table (ants = Figure 9, c-marking vs ants); default all",
+        help="which table (ants = Figure 9, c-marking vs ants; model = the T = a*D + b*TB fit of "
+        "Tables 1-3); default all (not the model)",
     )
     p.add_argument(
         "--runs",
@@ -98,6 +100,13 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         help="agent seeds per environment (common random numbers; the SE is then over "
         "environments); default 1",
     )
+    p.add_argument(
+        "--fit",
+        action="append",
+        default=[],
+        metavar="LABEL=FILE[,FILE...]",
+        help="--table model: also fit our times stored in these runner outputs (repeatable)",
+    )
     p.add_argument("--json", action="store_true", help="end with one JSON line of every mean")
     p.add_argument("--out", default="out", help="directory for the PNG plots (out/)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -120,6 +129,15 @@ def settings(args: argparse.Namespace) -> ForagingSettings:
     if args.trail_colours == "per-trail" and args.colour_on_move:
         raise UsageError("--trail-colours per-trail needs the source cell coloured: "
                          "not with --colour-on-move")  # fmt: skip
+    fits = []
+    for item in args.fit:
+        label, eq, files = item.partition("=")
+        if not eq or not label or not files:
+            raise UsageError(f"--fit {item!r}: LABEL=FILE[,FILE...]")
+        missing = [f for f in files.split(",") if not Path(f).is_file()]
+        if missing:
+            raise UsageError(f"--fit {label}: no file {missing[0]}")
+        fits.append((label, tuple(files.split(","))))
     return ForagingSettings(
         seed=args.seed,
         table=args.table,
@@ -136,6 +154,7 @@ def settings(args: argparse.Namespace) -> ForagingSettings:
         trail_colours=args.trail_colours,
         climb_any=args.climb_any,
         agent_seeds=args.agent_seeds,
+        fit=tuple(fits),
         out=Path(args.out),
         quiet=args.quiet,
         json=args.json,
@@ -170,15 +189,30 @@ def run(args: argparse.Namespace) -> int:
     elapsed = time.perf_counter() - t0
     print(
         f"\ntotal: {steps:,} agent-steps in {elapsed:.1f} s = {steps / elapsed:,.0f} "
-        f"agent-steps/s; plots: {', '.join(map(str, plots))}"
+        f"agent-steps/s; plots: {', '.join(str(p) for p in plots if p)}"
     )
     if s.json:
         print(json.dumps(no_nan(out), allow_nan=False))
     return 0
 
 
-def _table(t: str, s: ForagingSettings) -> tuple[str, dict[str, Any], list[Row], Path]:
+def _table(t: str, s: ForagingSettings) -> tuple[str, dict[str, Any], list[Row], Path | None]:
     """Measure table ``t``; its text, its figures, its rows and its plot."""
+    if t == "model":
+        texts, figures, rows, every = [], {}, [], {}
+        for table in (1, 2, 3):
+            every[table] = measured = model_rows(s, table)
+            ours = {label: load_times(files, table) for label, files in s.fit}
+            text, fig = report(table, measured, {k: v for k, v in ours.items() if v}, s.seed)
+            texts.append(text)
+            figures.update(fig)
+            rows += [r.d for r in measured]
+        texts.append("\nOne (a, b) for all three tables:")
+        texts.append(pooled(every, {t: paper_times(t) for t in every}).replace("pooled", "paper"))
+        for label, files in s.fit:
+            ours_all = {t: load_times(files, t) for t in every}
+            texts.append(pooled(every, ours_all).replace("pooled", label))
+        return "\n".join(texts), figures, rows, None
     if t == "1":
         xs, rows = table1_rows(s)
         text, figures = table1(xs, rows, s.seed)

@@ -7,7 +7,7 @@ from pathlib import Path
 
 #: Adaptive mode: a row runs until its standard error is at most this share of its mean.
 TARGET_SE = 0.05
-TABLES = ("1", "2", "3", "ants", "all")
+TABLES = ("1", "2", "3", "ants", "model", "all")
 
 
 @dataclass(frozen=True)
@@ -37,6 +37,8 @@ class ForagingSettings:
     trail_colours: str = "single"
     climb_any: bool = False
     agent_seeds: int = 1
+    #: ``model``: our stored times to fit beside the paper's, as (label, files) pairs.
+    fit: tuple[tuple[str, tuple[str, ...]], ...] = ()
     out: Path = Path("out")
     quiet: bool = False
     json: bool = False

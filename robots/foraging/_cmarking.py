@@ -52,8 +52,9 @@ the bits of the cell carried by at most one neighbour (a trail passing through h
 
 * LOADING's "is the cell coloured (part of a trail)" means "a trail ends here": a source only
   passed by another source's trail gets a trail of its own;
-* RETURN & REMOVE TRAIL (and the dead-end removal) erases only the trails ending where it starts,
-  following and clearing their bits; the other trails through the same cells stay whole;
+* RETURN & REMOVE TRAIL erases only the trails ending where it starts, following and clearing
+  their bits; the other trails through the same cells stay whole. The dead-end removal erases
+  the trails of the dead end that go no higher (a trail that ends there, or peaks there);
 * SEARCH & CLIMB TRAIL climbs a cell of any trail ("neighbouring cells are coloured").
 
 This needs the source cell coloured (``colour_source``). With one colour the bit is
@@ -174,7 +175,7 @@ class CMarkingAgent:
         dice = self._dice
         floor = -1 if self.climb_any else value  # the least value a climb may go to
         if task == Task.SEARCH and self.remove_dead_ends and self._at_dead_end(p, floor):
-            dead = self._own_trails(p)
+            dead = self._dead_trails(p, value)
             if dead:
                 task = Task.REMOVE
                 self.trail = dead
@@ -214,6 +215,20 @@ class CMarkingAgent:
         if not self.per_trail:
             return p.colour & TRAIL
         return ending(p.colour, p.neighbours)
+
+    def _dead_trails(self, p: Perception, here: int) -> int:
+        """At a dead end, the trails to erase: with one colour, the trail; per trail, those of
+        this cell that go no higher (no neighbour above ``here`` carries them). That is the
+        top of a trail whose source is gone, and also a peak of a trail drawn while the field
+        was still converging (it first rises, then falls to its source), which an agent that
+        only climbs cannot pass."""
+        if not self.per_trail:
+            return TRAIL
+        up = 0
+        for n in p.neighbours:
+            if n.value > here:
+                up |= n.colour
+        return p.colour & ~up
 
     def _search(self, neighbours: tuple[Neighbour, ...], floor: int, dice: Dice) -> int | None:
         """SEARCH & CLIMB TRAIL: resource, else climb to the highest coloured new neighbour of

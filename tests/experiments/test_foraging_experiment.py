@@ -132,3 +132,30 @@ def test_settings_are_a_frozen_record_not_the_namespace() -> None:
     with pytest.raises(AttributeError):
         s.runs = 5  # type: ignore[misc]
     assert vars(args) == vars(parse(["--table", "2", "--agents", "1,3", "--runs", "4"]))
+
+
+def test_model_fit_recovers_a_and_b_and_discovery_is_seeded() -> None:
+    from experiments.foraging._model import ModelRow, discovery, fit
+
+    rows = [ModelRow(k, fx.Row(str(k), [d]), [tb]) for k, d, tb in
+            ((1, 100, 900), (2, 60, 450), (4, 40, 225))]  # fmt: skip
+    f = fit(rows, {r.key: 0.5 * r.d.mean + 3.0 * r.tb_mean for r in rows})
+    assert f is not None and abs(f.a - 0.5) < 1e-9 and abs(f.b - 3.0) < 1e-9 and f.rms < 1e-12
+    one, tb = discovery(fx.SETUP2, 2, (1, 2, 0), (1, 2, 0, 2, 2), 100_000)
+    assert one.finished and one.iterations > 0 and tb > 0
+    assert discovery(fx.SETUP2, 2, (1, 2, 0), (1, 2, 0, 2, 2), 100_000) == (one, tb)
+
+
+def test_model_table_fits_stored_times(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    stored = tmp_path / "t2.txt"
+    stored.write_text('report\n{"table2": {"1": 1500.0, "2": 800.0}}\n')
+    argv = ["--table", "model", "--agents", "1,2", "--sizes", "12,25", "--runs", "2", "--quiet"]
+    args = parse([*argv, "--json", "--fit", f"ours={stored}", "--out", str(tmp_path)])
+    assert args.func(args) == 0
+    out = capsys.readouterr().out
+    last = json.loads(out.strip().splitlines()[-1])
+    assert set(last["model2"]["fits"]) == {"paper", "ours"} and "pooled" not in out
+    assert "paper over Tables 1, 2, 3" in out
+    bad = parse(["--table", "model", "--fit", f"x={tmp_path / 'none.txt'}"])
+    with pytest.raises(UsageError, match="no file"):
+        bad.func(bad)

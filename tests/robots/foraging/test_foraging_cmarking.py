@@ -213,3 +213,15 @@ def test_per_trail_team_forages_and_keeps_lemma_4_1() -> None:
             bits |= c
         assert lemma_4_1_holds(world.marks_array(), grid, base)
     assert world.exhausted and bin(bits).count("1") >= 2  # several trails, each its own colour
+
+
+def test_per_trail_dead_end_erases_a_peak_but_not_a_trail_going_on() -> None:
+    a = agent(trail_colours="per-trail", ident=0, team=2)
+    a.came_from = 2  # climbed from the south onto a peak: trail A falls on both sides
+    act = a.step(perception(9, A_BIT | B_BIT, 0, (2, 8, A_BIT, 0), (1, 7, A_BIT, 0),
+                            (3, 8, B_BIT, 0), (0, 10, B_BIT, 0)))  # fmt: skip
+    assert a.task == Task.SEARCH and act.move == 0  # B goes on up: climbed, nothing erased
+    b = agent(trail_colours="per-trail", ident=0, team=2)
+    b.came_from = 2
+    act = b.step(perception(9, A_BIT, 0, (2, 8, A_BIT, 0), (1, 7, A_BIT, 0)))
+    assert (b.task, b.trail, act.colour, act.move) == (Task.REMOVE, A_BIT, NO_COLOUR, 1)
