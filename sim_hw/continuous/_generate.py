@@ -1,4 +1,5 @@
-"""Seeded generators of continuous arenas: random obstacle fields and double corridors."""
+"""Seeded generators of continuous arenas: random obstacle fields, free points in them (where
+targets and robots go), and double corridors."""
 
 from __future__ import annotations
 
@@ -43,6 +44,49 @@ def random_obstacles(
         else:
             obstacles.append(ObstacleSpec("box", center=(x, y), size=(extent, extent), angle=angle))
     return WorldSpec(size=size, name=f"random-{count}", obstacles=tuple(obstacles))
+
+
+def free_points(
+    spec: WorldSpec,
+    count: int,
+    rng: np.random.Generator,
+    *,
+    clearance: float = 0.5,
+    apart: float = 0.0,
+    avoid: tuple[tuple[float, float], ...] = (),
+) -> list[tuple[float, float]]:
+    """``count`` points drawn uniformly in ``spec``'s arena, each ``clearance`` from the walls
+    and from every obstacle's bounding circle, and ``apart`` from each other and from the
+    points in ``avoid``. Same generator state → same points. Raises ``ValueError`` when the
+    arena is too full to place them (after 1000 draws a point)."""
+    w, h = spec.size
+    discs = [_bounding_circle(ob) for ob in spec.obstacles]
+    placed: list[tuple[float, float]] = []
+    others = list(avoid)
+    for _ in range(count * 1000):
+        if len(placed) >= count:
+            return placed
+        x = float(rng.uniform(clearance, w - clearance))
+        y = float(rng.uniform(clearance, h - clearance))
+        if any(math.hypot(x - cx, y - cy) < r + clearance for cx, cy, r in discs):
+            continue
+        if any(math.hypot(x - px, y - py) < apart for px, py in others):
+            continue
+        placed.append((x, y))
+        others.append((x, y))
+    if len(placed) < count:
+        raise ValueError(f"could place only {len(placed)} of {count} points")
+    return placed
+
+
+def _bounding_circle(ob: ObstacleSpec) -> tuple[float, float, float]:
+    if ob.shape == "circle":
+        return (ob.center[0], ob.center[1], ob.radius)
+    if ob.shape == "box":
+        return (ob.center[0], ob.center[1], math.hypot(*ob.size) / 2)
+    cx, cy = (ob.a[0] + ob.b[0]) / 2, (ob.a[1] + ob.b[1]) / 2
+    half = math.hypot(ob.b[0] - ob.a[0], ob.b[1] - ob.a[1]) / 2
+    return (cx, cy, half + ob.radius)
 
 
 def double_corridor(

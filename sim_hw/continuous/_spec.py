@@ -114,13 +114,21 @@ class ImmovableSpec:
 
 @dataclass(frozen=True, slots=True)
 class MarkerSpec:
-    """Something seen but not touched: a ``target``, a ``resource`` cell or a ``beacon``."""
+    """Something seen but not touched: a ``target``, a ``resource`` cell or a ``beacon``.
+
+    A marker with ``hears`` > 0 is a passive beacon a robot can mark (Sutantyo et al., V-B:
+    the finder sends "a specific message content to the target to turn on the repelling
+    signal"): a robot whose LED shows ``mark:<id>`` within ``hears`` metres of its centre
+    marks it, and from then on its status reads ``marked``.
+    """
 
     kind: str
     id: str
     center: Vec
     radius: float = 0.2
     status: str = ""
+    hears: float = 0.0
+    """Range (m) within which a robot's ``mark:<id>`` LED message marks it (0: never)."""
 
 
 @dataclass(frozen=True, slots=True)

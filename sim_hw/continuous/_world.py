@@ -19,6 +19,8 @@ import numpy as np
 import pymunk
 from pymunk._chipmunk import lib as _lib
 
+from robots.library import MARK, MARKED
+
 from . import _bodies, _devices
 from ._contract import Command, Readings
 from ._spec import RobotSpec, WorldSpec
@@ -98,11 +100,13 @@ class World:
             self.entities[shape] = _devices.Entity(
                 "immovable", im.id, _const(im.center), _const(im.status)
             )
+        self.marked: dict[str, float] = {}
+        """Markable markers marked so far (``MarkerSpec.hears``) and the time each was marked."""
+        self._markable = {mk.id: mk for mk in spec.markers if mk.hears > 0.0}
         for mk in spec.markers:
             shape = _bodies.add_marker(space, mk)
-            self.entities[shape] = _devices.Entity(
-                mk.kind, mk.id, _const(mk.center), _const(mk.status)
-            )
+            status = _marker_status(self.marked, mk.id, mk.status)
+            self.entities[shape] = _devices.Entity(mk.kind, mk.id, _const(mk.center), status)
         self.floor = _devices.Floor(spec.size[0], spec.size[1], spec.cell)
         for i, j, value, colour in spec.floor:
             self.floor.set(i, j, value, colour)
@@ -237,8 +241,22 @@ class World:
                 set_ang(control, w)
             self.space.step(DT)
         self.tick += 1
+        if self._markable:
+            self._hear_marks(robots)
         for robot in robots:
             robot.readings = self._measure(robot)
+
+    def _hear_marks(self, robots: list[_Robot]) -> None:
+        """Markable markers take the ``mark:<id>`` LED messages of robots within ``hears``."""
+        for robot in robots:
+            if not robot.led.startswith(MARK):
+                continue
+            mk = self._markable.get(robot.led[len(MARK) :])
+            if mk is None or mk.id in self.marked:
+                continue
+            x, y = robot.parts.body.position
+            if math.hypot(x - mk.center[0], y - mk.center[1]) <= mk.hears:
+                self.marked[mk.id] = self.time
 
     def _measure(self, robot: _Robot) -> Readings:
         parts = robot.parts
@@ -323,6 +341,7 @@ class World:
                 rid: [*_pose(r.parts.body), r.led] for rid, r in sorted(self.robots.items())
             },
             "boxes": {bid: list(_pose(b.body)) for bid, b in sorted(self.boxes.items())},
+            "marked": dict(self.marked),
         }
 
 
@@ -336,3 +355,7 @@ def _center_of(body: pymunk.Body) -> Callable[[], tuple[float, float]]:
 
 def _const(value: _T) -> Callable[[], _T]:
     return lambda: value
+
+
+def _marker_status(marked: dict[str, float], marker: str, status: str) -> Callable[[], str]:
+    return lambda: MARKED if marker in marked else status

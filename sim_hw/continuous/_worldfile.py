@@ -287,7 +287,14 @@ def _immovable(t: _Table) -> ImmovableSpec:
 
 def _marker(t: _Table, kind: str) -> MarkerSpec:
     status = str(t.integer("amount", 1)) if kind == "resource" else t.string("status", "")
-    return MarkerSpec(kind, t.string("id"), t.vector("center", 2), t.number("radius", 0.2), status)
+    return MarkerSpec(
+        kind,
+        t.string("id"),
+        t.vector("center", 2),
+        t.number("radius", 0.2),
+        status,
+        t.number("hears", 0.0, strict=False),
+    )
 
 
 def _generated(t: _Table) -> WorldSpec:
