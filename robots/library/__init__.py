@@ -11,6 +11,10 @@ function or small class of readings → command, testable without a world.
   :func:`station`;
 * manipulation — :func:`pusher`, :func:`steerer`, :class:`Path`, :func:`stations`,
   :func:`pusher_command`, :func:`steerer_command`, :func:`object_pose`;
+* Lévy search (Sutantyo et al.) — :class:`LevyWalker` (eq. 10, Fig. 4), :func:`walker` and
+  :data:`METHODS` (FL, L, L+P), :func:`levy_search`, :func:`repulsion` (eq. 9),
+  :func:`mantegna` (eq. 11-12), :class:`LevySteps`, :class:`FixedSteps`,
+  :func:`viswanathan_mu` (eq. 4-5), :func:`stable_alpha`, :func:`mean_flights` (eq. 3);
 * training (section 5) — :func:`snapshot`.
 """
 
@@ -25,6 +29,29 @@ from ._goto import (
     station,
     steer,
     turn_to,
+)
+from ._levy import (
+    MARK,
+    MARKED,
+    METHODS,
+    LevyCommand,
+    LevyParams,
+    LevySense,
+    LevyWalker,
+    Neighbour,
+    hal_sense,
+    levy_search,
+    levy_sense,
+    repulsion,
+    walker,
+)
+from ._levy_steps import (
+    FixedSteps,
+    LevySteps,
+    mantegna,
+    mean_flights,
+    stable_alpha,
+    viswanathan_mu,
 )
 from ._manipulate import (
     Path,
@@ -53,7 +80,17 @@ from ._search import (
 from ._snapshot import snapshot
 
 __all__ = [
+    "MARK",
+    "MARKED",
+    "METHODS",
+    "FixedSteps",
     "Found",
+    "LevyCommand",
+    "LevyParams",
+    "LevySense",
+    "LevySteps",
+    "LevyWalker",
+    "Neighbour",
     "Path",
     "Predicate",
     "Wander",
@@ -64,19 +101,26 @@ __all__ = [
     "follow_command",
     "goto_object",
     "goto_point",
+    "hal_sense",
     "kind_ahead",
+    "levy_search",
+    "levy_sense",
     "locate",
+    "mantegna",
+    "mean_flights",
     "movable",
     "moved",
     "object_pose",
     "pusher",
     "pusher_command",
     "recognition",
+    "repulsion",
     "search",
     "sees",
     "sidestep",
     "sighting_of",
     "snapshot",
+    "stable_alpha",
     "station",
     "stations",
     "steer",
@@ -84,4 +128,6 @@ __all__ = [
     "steerer_command",
     "teammate_ahead",
     "turn_to",
+    "viswanathan_mu",
+    "walker",
 ]
