@@ -1,0 +1,139 @@
+"""`mover experiment levy`: its command line, the settings it makes of it, and the run."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import secrets
+import time
+from dataclasses import replace
+from pathlib import Path
+
+from mover.cli import UsageError
+from robots.library import METHODS
+
+from .._common import comma_list, runner_parser
+from ._paper import ALPHA_TARGETS, ALPHAS, FIG8_TARGETS, FIG9_ROBOTS, Setup
+from ._report import saturation, speed, table, theory
+from ._settings import LevySettings
+from ._sweep import SWEEPS, points, run_points
+
+_KEYS = {"fig8": "targets", "fig9": "robots", "alpha": "alpha"}
+_TITLES = {
+    "fig8": "search time (s) vs number of targets, 10 robots (Fig. 8)",
+    "fig9": "search time (s) vs number of robots, 8 targets (Fig. 9)",
+    "alpha": "search time (s) vs stable index α, 10 robots, 8 targets (beyond the paper)",
+}
+
+
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    """Add the ``levy`` experiment runner."""
+    from . import __doc__ as doc
+
+    help = "FL, Lévy and Lévy + potential field search on seeded arenas (Sutantyo et al., V)"
+    parser = runner_parser(sub, "levy", help, doc)
+    parser.add_argument(
+        "--sweep",
+        type=comma_list(str, SWEEPS),
+        default=["fig8", "fig9"],
+        help="comma list of fig8, fig9, alpha (default fig8,fig9)",
+    )
+    parser.add_argument("--runs", type=int, default=50, help="trials per point (default 50)")
+    parser.add_argument("--seed", type=int, default=None, help="master seed (default: random)")
+    parser.add_argument(
+        "--methods",
+        type=comma_list(str, METHODS),
+        default=list(METHODS),
+        help="comma list of FL, L, L+P",
+    )
+    parser.add_argument(
+        "--targets",
+        type=comma_list(int),
+        default=list(FIG8_TARGETS),
+        help="Fig. 8's target counts (default 1,2,4,8,12,16)",
+    )
+    parser.add_argument(
+        "--robots",
+        type=comma_list(int),
+        default=list(FIG9_ROBOTS),
+        help="Fig. 9's robot counts (default 1,2,5,10,15,20,30)",
+    )
+    parser.add_argument(
+        "--alphas",
+        type=comma_list(float),
+        default=list(ALPHAS),
+        help="stable indices of the alpha sweep (default 0.5,0.75,1,1.25,1.5,2)",
+    )
+    parser.add_argument("--alpha", type=float, default=Setup.alpha, help="the walks' α (1)")
+    parser.add_argument("--max-time", type=float, default=Setup.max_time, help="censor (s)")
+    parser.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
+    parser.add_argument(
+        "--save",
+        type=Path,
+        default=Path("results/levy/runs"),
+        help="per-point JSON-lines directory, read back and added to (default results/levy/runs)",
+    )
+    parser.add_argument("--no-save", action="store_true", help="keep no per-point files")
+    parser.add_argument("--out", type=Path, default=Path("out"), help="plot directory")
+    parser.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
+    parser.add_argument(
+        "--json", action="store_true", help="end with one JSON line holding every run"
+    )
+    parser.add_argument("--quiet", action="store_true", help="no progress line")
+    parser.set_defaults(func=run)
+
+
+def settings(args: argparse.Namespace) -> LevySettings:
+    """The settings the command line asks for, checked. Raises
+    :class:`~mover.cli.UsageError` naming what is wrong."""
+    if args.runs < 1 or args.workers < 1:
+        raise UsageError("--runs and --workers must be positive")
+    if min(args.targets) < 1 or min(args.robots) < 1:
+        raise UsageError("--targets and --robots must be positive")
+    if not all(0 < a <= 2 for a in [*args.alphas, args.alpha]):
+        raise UsageError("--alpha and --alphas must be in (0, 2]")
+    if args.max_time <= 0:
+        raise UsageError("--max-time must be positive")
+    return LevySettings(
+        seed=secrets.randbits(32) if args.seed is None else args.seed,
+        runs=args.runs,
+        sweeps=tuple(args.sweep),
+        methods=tuple(args.methods),
+        targets=tuple(args.targets),
+        robots=tuple(args.robots),
+        alphas=tuple(args.alphas),
+        workers=args.workers,
+        setup=replace(Setup(), alpha=args.alpha, max_time=args.max_time),
+        save=None if args.no_save else args.save,
+        out=None if args.no_plots else args.out,
+        json=args.json,
+        progress=not args.quiet,
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the sweeps; print the seed, a table per sweep, the saturation and the speed."""
+    s = settings(args)
+    print(f"seed: {s.seed}")
+    print(f"sweeps: {','.join(s.sweeps)}  methods: {','.join(s.methods)}  runs: {s.runs}")
+    print(f"setup: {s.setup}")
+    everything = []
+    for sweep in s.sweeps:
+        t0 = time.monotonic()
+        records, fresh, wall = run_points(s, points(s, sweep), sweep)
+        everything.extend(records)
+        print(table(records, _KEYS[sweep], _TITLES[sweep], s.setup))
+        if sweep == "fig9":
+            print(saturation(records, s.setup))
+        if sweep == "alpha":
+            print(theory(s.setup, ALPHA_TARGETS))
+        print(f"{sweep}: {len(fresh)} runs made in {time.monotonic() - t0:.0f} s wall")
+        if fresh:
+            print(speed(fresh, wall))
+        if s.out is not None:
+            from ._plots import plot
+
+            print(f"wrote {plot(sweep, records, s.setup, s.out)}")
+    if s.json:
+        print(json.dumps({"seed": s.seed, "runs": everything}))
+    return 0

@@ -1,0 +1,55 @@
+"""The Lévy-search paper's experiment (Sutantyo et al., section V): its setup and sweeps.
+
+The paper gives the arena (20 × 20 "metres", randomly placed obstacles of several sizes), the
+speed (60 cm/s), random deployment, 20 trials a point on different arenas, and the measure:
+the time until all targets are found. It does not give the sensing and signature ranges, the
+obstacle count, the turn phase, nor the numbers behind Fig. 8-9 (only their ordering, L+P < L
+< FL, and that the gain from more robots saturates): those below are ours, stated in
+:class:`Setup`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+#: Fig. 8: search time against the number of targets, 10 robots.
+FIG8_TARGETS = (1, 2, 4, 8, 12, 16)
+FIG8_ROBOTS = 10
+#: Fig. 9: search time against the number of robots, 8 targets.
+FIG9_ROBOTS = (1, 2, 5, 10, 15, 20, 30)
+FIG9_TARGETS = 8
+#: Beyond the paper: search time against the stable index α for L and L+P.
+ALPHAS = (0.5, 0.75, 1.0, 1.25, 1.5, 2.0)
+ALPHA_ROBOTS = 10
+ALPHA_TARGETS = 8
+#: The paper's ordering of the mean search times at every point of Fig. 8-9.
+ORDER = ("L+P", "L", "FL")
+
+
+@dataclass(frozen=True)
+class Setup:
+    """One trial's arena, robots and controller settings (SI units)."""
+
+    size: float = 20.0
+    """Side of the square arena (m), V-A."""
+    obstacles: int = 12
+    obstacle_min: float = 0.5
+    obstacle_max: float = 2.5
+    speed: float = 0.6
+    """v of eq. 10 (m/s), V-A."""
+    sense_range: float = 1.0
+    """r_v: a target is detected this near (m)."""
+    signature_range: float = 3.0
+    """A marked target's signature reaches this far (m), "wider than the sensing range"."""
+    rho0: float = 1.5
+    """ρ0 of eq. 8-9: robots repel within it (m)."""
+    alpha: float = 1.0
+    """Mantegna's stable index of the Lévy steps (1: Viswanathan's μ = 2)."""
+    scale: float = 1.0
+    """Metres per unit Lévy step."""
+    cap: float = 20.0
+    """The longest step (m)."""
+    fixed: float = 1.0
+    """The fixed-length walk's step (m): the Lévy steps' median at α = 1 (scale × 1)."""
+    max_time: float = 6000.0
+    """A trial that has not found every target by then stops, censored (s)."""

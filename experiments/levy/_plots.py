@@ -1,0 +1,50 @@
+"""The Lévy experiment's figures, like the paper's Fig. 8 (search time against targets) and
+Fig. 9 (against robots), and the α sweep; matplotlib with the Agg backend, imported only when
+plotting."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ._paper import ORDER, Setup
+from ._report import Records, times
+
+_LABELS = {"fig8": "targets", "fig9": "robots", "alpha": "alpha"}
+_TITLES = {
+    "fig8": "search time vs targets, 10 robots (Fig. 8)",
+    "fig9": "search time vs robots, 8 targets (Fig. 9)",
+    "alpha": "search time vs stable index α, 10 robots, 8 targets",
+}
+
+
+def plot(sweep: str, records: Records, setup: Setup, out: Path) -> Path:
+    """Write ``levy_<sweep>.png``: mean search time ± se per method."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    key = _LABELS[sweep]
+    out.mkdir(parents=True, exist_ok=True)
+    fig, ax = plt.subplots(figsize=(5.5, 3.8))
+    for m in ORDER:
+        mine = [r for r in records if r["method"] == m]
+        xs = sorted({r[key] for r in mine})
+        if not xs:
+            continue
+        ts = [times([r for r in mine if r[key] == x], setup.max_time) for x in xs]
+        ys = [float(np.mean(t)) for t in ts]
+        es = [float(np.std(t, ddof=1) / np.sqrt(len(t))) if len(t) > 1 else 0.0 for t in ts]
+        ax.errorbar(xs, ys, yerr=es, marker="o", ms=4, capsize=3, label=m)
+    ax.set_xlabel(key)
+    ax.set_ylabel("time to find all targets (s)")
+    ax.set_title(_TITLES[sweep], fontsize=9)
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    path = out / f"levy_{sweep}.png"
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path

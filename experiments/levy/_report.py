@@ -1,0 +1,109 @@
+"""The Lévy experiment's report: search time mean ± sd (se) per point, the paper's ordering
+beside the measured one, the saturation with more robots, and the α sweep against theory."""
+
+from __future__ import annotations
+
+import math
+from collections import defaultdict
+from typing import Any
+
+from robots.library import stable_alpha, viswanathan_mu
+
+from .._common import summary
+from ._paper import ORDER, Setup
+
+Records = list[dict[str, Any]]
+
+
+def times(records: Records, cap: float) -> list[float]:
+    """Search times, a censored run counted as ``cap`` (so a mean with censored runs is a
+    lower bound)."""
+    return [cap if r["time"] is None else float(r["time"]) for r in records]
+
+
+def _by(records: Records, key: str) -> dict[tuple[Any, str], Records]:
+    groups: dict[tuple[Any, str], Records] = defaultdict(list)
+    for r in records:
+        groups[(r[key], r["method"])].append(r)
+    return groups
+
+
+def _cell(recs: Records, cap: float) -> str:
+    if not recs:
+        return f"{'-':>24}"
+    s = summary(times(recs, cap))
+    censored = sum(r["time"] is None for r in recs)
+    mark = f"{censored}c" if censored else ""
+    return f"{s.mean:7.1f} ±{s.sd:6.1f} ({s.se:5.1f}){mark:>3}"
+
+
+def table(records: Records, key: str, title: str, setup: Setup) -> str:
+    """Mean ± sd (se) of the search time (s) against ``key`` (``targets``, ``robots`` or
+    ``alpha``), one column per method, and whether the paper's ordering holds at each row."""
+    groups = _by(records, key)
+    methods = [m for m in ORDER if any(r["method"] == m for r in records)]
+    xs = sorted({r[key] for r in records})
+    out = [f"\n{title}", f"{key:>7} " + "".join(f"{m + ' mean ±sd (se)':>25}" for m in methods)]
+    if key != "alpha":
+        out[-1] += "   measured order   paper"
+    for x in xs:
+        row = f"{x:>7g} " + "".join(f" {_cell(groups[(x, m)], setup.max_time)}" for m in methods)
+        if key != "alpha":
+            means = {m: summary(times(groups[(x, m)], setup.max_time)).mean for m in methods}
+            order = " < ".join(sorted(means, key=lambda m: means[m]))
+            row += f"   {order:<16} {' < '.join(ORDER)}"
+        out.append(row)
+    runs = sorted({len(v) for v in groups.values()})
+    censored = sum(r["time"] is None for r in records)
+    out.append(
+        f"(runs per point: {runs}; censored at {setup.max_time:g} s: {censored}, marked 'c'"
+        " and counted as that time)"
+    )
+    return "\n".join(out)
+
+
+def saturation(records: Records, setup: Setup) -> str:
+    """Fig. 9's saturation: the speed-up T(1)/T(n) against the ideal n, and the team's
+    robot-seconds n·T(n) per method (constant if robots added work independently)."""
+    groups = _by(records, "robots")
+    ns = sorted({r["robots"] for r in records})
+    methods = [m for m in ORDER if any(r["method"] == m for r in records)]
+    out = ["\nsaturation (Fig. 9): speed-up T(1)/T(n) and efficiency T(1)/(n T(n))"]
+    out.append(f"{'robots':>7} " + "".join(f"{m + ' speed-up, eff.':>24}" for m in methods))
+    for n in ns:
+        cells = []
+        for m in methods:
+            base = groups.get((min(ns), m))
+            here = groups.get((n, m))
+            if not base or not here:
+                cells.append(f"{'-':>24}")
+                continue
+            t1 = summary(times(base, setup.max_time)).mean * min(ns)
+            tn = summary(times(here, setup.max_time)).mean
+            cells.append(f"{t1 / tn:14.2f} {t1 / (n * tn):9.2f}")
+        out.append(f"{n:>7} " + "".join(cells))
+    return "\n".join(out)
+
+
+def theory(setup: Setup, targets: int) -> str:
+    """What the theory predicts for the α sweep: Viswanathan's estimate (eq. 4-5) for
+    non-destructive search, and that destructive search's optimum is ballistic."""
+    density = targets / setup.size**2
+    lam = 1.0 / (2.0 * setup.sense_range * density)  # mean free path between targets
+    mu = viswanathan_mu(lam, setup.sense_range)
+    return (
+        f"theory: λ = 1/(2 r_v ρ) = {lam:.1f} m for {targets} targets (r_v = "
+        f"{setup.sense_range:g} m); non-destructive optimum (eq. 4-5) μ = {mu:.2f}, "
+        f"stable α = {stable_alpha(mu):.2f}; destructive search (a found target does not count "
+        "again, as here): the optimum moves to μ → 1, α → 0, ballistic motion (Viswanathan et "
+        "al. 1999; Santos et al. 2004)"
+    )
+
+
+def speed(records: Records, wall: float) -> str:
+    """Simulated robot-seconds per wall second of the runs just made."""
+    fresh = sum(r["robot_s"] for r in records)
+    cpu = sum(r["wall_s"] for r in records)
+    per_core = fresh / cpu if cpu else math.nan
+    overall = f", {fresh / wall:.0f} robot-s per wall s over the pool" if wall else ""
+    return f"speed: {per_core:.0f} simulated robot-seconds per wall second a worker{overall}"

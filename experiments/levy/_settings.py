@@ -1,0 +1,48 @@
+"""What a Lévy-search run does and reports: one frozen record, made from the command line."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ._paper import Setup
+
+
+@dataclass(frozen=True)
+class Point:
+    """One point of a sweep: a method on ``robots`` robots, ``targets`` targets, index α."""
+
+    method: str
+    robots: int
+    targets: int
+    alpha: float
+
+    @property
+    def name(self) -> str:
+        """The point's file name stem (``L+P_r10_t8_a1``)."""
+        return f"{self.method}_r{self.robots}_t{self.targets}_a{self.alpha:g}"
+
+
+@dataclass(frozen=True)
+class LevySettings:
+    """The sweeps to run (every trial's seed derives from ``seed``) and what to print.
+
+    ``save``: the directory of per-point JSON-lines files, appended as runs finish and read
+    back so that a later run with the same seed only adds the runs missing (None: keep
+    nothing); ``out``: the figures' directory (None: none); ``json``: end with one JSON line
+    of every run.
+    """
+
+    seed: int
+    runs: int
+    sweeps: tuple[str, ...]
+    methods: tuple[str, ...]
+    targets: tuple[int, ...]
+    robots: tuple[int, ...]
+    alphas: tuple[float, ...]
+    workers: int = 2
+    setup: Setup = field(default_factory=Setup)
+    save: Path | None = None
+    out: Path | None = None
+    json: bool = False
+    progress: bool = True

@@ -1,0 +1,94 @@
+"""The points of the sweeps, their runs on a pool of worker processes, and the saved runs.
+
+Each point's runs are kept in ``<save>/<point>.jsonl``, one JSON object a line, appended as
+they finish; a later run with the same master seed reads them and runs only the missing ones,
+so that more trials can be added to a point (``--runs 100`` after ``--runs 50``).
+"""
+
+from __future__ import annotations
+
+import json
+import multiprocessing
+import time
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+from .._common import Progress
+from ._paper import (
+    ALPHA_ROBOTS,
+    ALPHA_TARGETS,
+    FIG8_ROBOTS,
+    FIG9_TARGETS,
+)
+from ._settings import LevySettings, Point
+from ._trial import run_trial
+
+Record = dict[str, Any]
+SWEEPS = ("fig8", "fig9", "alpha")
+
+
+def points(s: LevySettings, sweep: str) -> list[Point]:
+    """The points of one sweep: ``fig8`` (targets, 10 robots), ``fig9`` (robots, 8 targets),
+    ``alpha`` (the stable index, L and L+P, 10 robots and 8 targets)."""
+    a = s.setup.alpha
+    if sweep == "fig8":
+        return [Point(m, FIG8_ROBOTS, t, a) for t in s.targets for m in s.methods]
+    if sweep == "fig9":
+        return [Point(m, n, FIG9_TARGETS, a) for n in s.robots for m in s.methods]
+    if sweep == "alpha":
+        ms = [m for m in s.methods if m != "FL"]
+        return [Point(m, ALPHA_ROBOTS, ALPHA_TARGETS, x) for x in s.alphas for m in ms]
+    raise ValueError(f"unknown sweep {sweep!r}")
+
+
+def load(save: Path | None, point: Point, seed: int) -> dict[int, Record]:
+    """The saved runs of ``point`` under master ``seed``, by run index."""
+    if save is None:
+        return {}
+    path = save / f"{point.name}.jsonl"
+    if not path.exists():
+        return {}
+    got: dict[int, Record] = {}
+    for line in path.read_text().splitlines():
+        if line.strip():
+            rec = json.loads(line)
+            if rec.get("seed") == seed:
+                got[int(rec["run"])] = rec
+    return got
+
+
+def _one(job: tuple[LevySettings, Point, int]) -> Record:
+    s, p, run = job
+    setup = replace(s.setup, alpha=p.alpha)
+    rec = run_trial(setup, p.method, p.robots, p.targets, s.seed, run)
+    rec["seed"] = s.seed
+    return rec
+
+
+def run_points(
+    s: LevySettings, pts: list[Point], label: str = ""
+) -> tuple[list[Record], list[Record], float]:
+    """Every run of ``pts`` (saved ones read back, missing ones run on ``s.workers``
+    processes and saved as they finish): all records, the fresh ones, and the wall seconds
+    spent running them."""
+    have = {p: load(s.save, p, s.seed) for p in pts}
+    jobs = [(s, p, k) for p in pts for k in range(s.runs) if k not in have[p]]
+    records = [r for p in pts for k, r in sorted(have[p].items()) if k < s.runs]
+    t0 = time.monotonic()
+    bar = Progress(len(jobs), label, enabled=s.progress and bool(jobs))
+    if s.save is not None:
+        s.save.mkdir(parents=True, exist_ok=True)
+    fresh: list[Record] = []
+    ctx = multiprocessing.get_context("fork")
+    with ctx.Pool(max(1, s.workers)) as pool:
+        for rec in pool.imap_unordered(_one, jobs, chunksize=1):
+            records.append(rec)
+            fresh.append(rec)
+            if s.save is not None:
+                p = Point(rec["method"], rec["robots"], rec["targets"], rec["alpha"])
+                with (s.save / f"{p.name}.jsonl").open("a") as f:
+                    f.write(json.dumps(rec) + "\n")
+            bar.update(len(fresh), f"{rec['method']} n={rec['robots']} t={rec['targets']}")
+    bar.close(len(fresh))
+    return records, fresh, time.monotonic() - t0

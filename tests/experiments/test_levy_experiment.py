@@ -1,0 +1,139 @@
+"""The Lévy runner: seeded trials, the arena as a world file, its command line (tables with
+the paper's ordering, saved runs that a later run adds to, JSON, figures) and usage errors."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from dataclasses import replace
+from pathlib import Path
+
+import pytest
+
+from experiments.levy import (
+    Setup,
+    arena,
+    register,
+    run_trial,
+    run_world,
+    table,
+    theory,
+    world_data,
+)
+from mover.cli import UsageError
+from sim_hw.continuous import load_world
+
+SMALL = replace(Setup(), size=8.0, obstacles=3, max_time=300.0)
+
+
+def _parse(*argv: str) -> argparse.Namespace:
+    parser = argparse.ArgumentParser()
+    register(parser.add_subparsers(dest="cmd"))
+    return parser.parse_args(["levy", *argv])
+
+
+def test_a_trial_is_a_function_of_its_seeds() -> None:
+    a = run_trial(SMALL, "L+P", 3, 2, 4, 1)
+    b = run_trial(SMALL, "L+P", 3, 2, 4, 1)
+    strip = ("wall_s",)
+    assert {k: v for k, v in a.items() if k not in strip} == {
+        k: v for k, v in b.items() if k not in strip
+    }
+    assert a["time"] is not None and a["time"] == a["found"][-1] and len(a["found"]) == 2
+    assert a["robot_s"] == pytest.approx(3 * a["sim_s"])
+
+
+def test_the_arena_keeps_targets_and_robots_clear_and_is_shared_by_methods() -> None:
+    spec = arena(Setup(), 10, 8, 3, 0)
+    assert spec.size == (20.0, 20.0) and len(spec.obstacles) > 0
+    assert len(spec.markers) == 8 and all(m.hears > Setup().sense_range for m in spec.markers)
+    assert sorted(spec.robots) == [f"r{i:02d}" for i in range(10)]
+    for m in spec.markers:
+        for n in spec.markers:
+            assert m is n or math.dist(m.center, n.center) >= 2.0
+    assert arena(Setup(), 10, 8, 3, 0) == spec
+    assert arena(Setup(), 10, 8, 3, 1) != spec
+    # the same obstacles for every target count of run 0
+    assert arena(Setup(), 10, 4, 3, 0).obstacles == spec.obstacles
+
+
+def test_the_arena_as_a_world_file_loads_back(tmp_path: Path) -> None:
+    spec = arena(SMALL, 3, 2, 4, 1)
+    path = tmp_path / "levy.json"
+    path.write_text(json.dumps(world_data(spec)))
+    loaded = load_world(path)
+    assert [m.center for m in loaded.markers] == [m.center for m in spec.markers]
+    assert [m.hears for m in loaded.markers] == [m.hears for m in spec.markers]
+    assert len(loaded.obstacles) == len(spec.obstacles)
+    for rid, robot in spec.robots.items():
+        assert loaded.robots[rid].pose == pytest.approx(robot.pose)
+    assert loaded.robot.camera == spec.robot.camera
+    assert run_world(loaded, "FL", SMALL, [1])["time"] is not None
+
+
+def test_runner_tables_save_and_add_runs(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    save = tmp_path / "runs"
+    common = ("--seed", "9", "--sweep", "fig8", "--targets", "1", "--save", str(save))
+    args = _parse(*common, "--runs", "2", "--out", str(tmp_path), "--methods", "L,L+P")
+    assert args.func(args) == 0
+    out, err = capsys.readouterr()
+    assert out.startswith("seed: 9\n")
+    assert "search time (s) vs number of targets, 10 robots (Fig. 8)" in out
+    assert "L+P < L < FL" in out  # the paper's ordering, beside the measured one
+    assert "robot-seconds per wall second" in out and "[####" in err
+    assert (tmp_path / "levy_fig8.png").stat().st_size > 0
+    files = sorted(p.name for p in save.iterdir())
+    assert files == ["L+P_r10_t1_a1.jsonl", "L_r10_t1_a1.jsonl"]
+    first = (save / "L_r10_t1_a1.jsonl").read_text().splitlines()
+    assert len(first) == 2
+    more = _parse(*common, "--runs", "3", "--no-plots", "--json", "--methods", "L,L+P")
+    assert more.func(more) == 0
+    out, _ = capsys.readouterr()
+    assert "fig8: 2 runs made" in out  # only run 2 of each method was missing
+    lines = (save / "L_r10_t1_a1.jsonl").read_text().splitlines()
+    assert lines[:2] == first and len(lines) == 3
+    data = json.loads(out.strip().splitlines()[-1])
+    assert data["seed"] == 9 and sorted(r["run"] for r in data["runs"]) == [0, 0, 1, 1, 2, 2]
+
+
+def test_censored_runs_are_marked_and_the_alpha_sweep_names_the_theory(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    args = _parse(
+        "--seed", "2", "--sweep", "fig9,alpha", "--robots", "1", "--alphas", "0.5,2",
+        "--runs", "1", "--max-time", "5", "--no-save", "--no-plots", "--workers", "1", "--quiet",
+    )  # fmt: skip
+    assert args.func(args) == 0
+    out = capsys.readouterr()[0]
+    assert "saturation (Fig. 9)" in out and "destructive search" in out
+    assert "c " in out or "c\n" in out  # a censored cell
+
+
+def test_table_and_theory_by_hand() -> None:
+    rec = [
+        {"method": m, "targets": 4, "time": t, "robots": 10, "alpha": 1.0}
+        for m, t in (("FL", 30.0), ("L", 20.0), ("L+P", 10.0), ("L+P", 14.0))
+    ]
+    text = table(rec, "targets", "t", Setup())
+    assert "12.0 ±   2.8 (  2.0)" in text and text.count("L+P < L < FL") == 2
+    assert "μ = 1.90" in theory(Setup(), 8)
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ("--runs", "0"),
+        ("--workers", "0"),
+        ("--targets", "0"),
+        ("--alphas", "0.5,2.5"),
+        ("--alpha", "0"),
+        ("--max-time", "-1"),
+    ],
+)
+def test_usage_errors(argv: tuple[str, ...]) -> None:
+    args = _parse(*argv, "--no-save")
+    with pytest.raises(UsageError):
+        args.func(args)
