@@ -55,7 +55,10 @@ the bits of the cell carried by at most one neighbour (a trail passing through h
 * RETURN & REMOVE TRAIL erases only the trails ending where it starts, following and clearing
   their bits; the other trails through the same cells stay whole. The dead-end removal erases
   the trails of the dead end that go no higher (a trail that ends there, or peaks there);
-* SEARCH & CLIMB TRAIL climbs a cell of any trail ("neighbouring cells are coloured").
+* SEARCH & CLIMB TRAIL climbs a cell of any trail ("neighbouring cells are coloured") from off
+  the trails, and keeps to the trails of its cell once on one: two trails side by side would
+  otherwise make a ring of coloured cells that a climber allowed to go down as well as up
+  (``climb_any``) circles forever (seen in Setup 3, 50×50: 3 runs in 30, all 50 agents caught).
 
 This needs the source cell coloured (``colour_source``). With one colour the bit is
 :data:`TRAIL` and every rule above reduces to the single-colour ones, step for step.
@@ -181,7 +184,7 @@ class CMarkingAgent:
                 self.trail = dead
                 self.came_from = None  # the way down the trail is the way it came up
         if task == Task.SEARCH:
-            move = self._search(p.neighbours, floor, dice)
+            move = self._search(p.neighbours, self._keep(p), floor, dice)
         elif task == Task.COLOUR:
             # RETURN & COLOUR TRAIL: "move to ... the least value, colour the cell" — each cell
             # moved into, and the source cell too with colour_source.
@@ -230,9 +233,17 @@ class CMarkingAgent:
                 up |= n.colour
         return p.colour & ~up
 
-    def _search(self, neighbours: tuple[Neighbour, ...], floor: int, dice: Dice) -> int | None:
-        """SEARCH & CLIMB TRAIL: resource, else climb to the highest coloured new neighbour of
-        value at least ``floor``, else EXPLORATION (Algorithm 2)."""
+    def _keep(self, p: Perception) -> int:
+        """The trails a climber here keeps to: per trail, those of its cell if it is on one
+        (-1, any, off a trail or with one colour)."""
+        return p.colour if self.per_trail and p.colour != NO_COLOUR else -1
+
+    def _search(
+        self, neighbours: tuple[Neighbour, ...], keep: int, floor: int, dice: Dice
+    ) -> int | None:
+        """SEARCH & CLIMB TRAIL: resource, else climb to the highest new neighbour coloured
+        with one of the trails ``keep`` of value at least ``floor``, else EXPLORATION
+        (Algorithm 2)."""
         move = resource_neighbour(neighbours, dice)
         if move is not None:
             return move
@@ -240,7 +251,7 @@ class CMarkingAgent:
         best = floor  # climbing goes up: only coloured cells higher than this one
         ties: list[Neighbour] = []
         for n in neighbours:
-            if n.colour == NO_COLOUR or n.direction == back:
+            if not n.colour & keep or n.direction == back:
                 continue
             if n.value > best:
                 best = n.value
@@ -256,11 +267,11 @@ class CMarkingAgent:
         ``floor`` to climb to: the top of a trail that leads nowhere any more."""
         if p.colour == NO_COLOUR or p.at_base or p.resource > 0:
             return False
-        back = self.came_from
+        back, keep = self.came_from, self._keep(p)
         for n in p.neighbours:
             if n.resource > 0:
                 return False
-            if n.colour != NO_COLOUR and n.direction != back and n.value > floor:
+            if n.colour & keep and n.direction != back and n.value > floor:
                 return False
         return True
 

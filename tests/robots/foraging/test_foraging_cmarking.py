@@ -225,3 +225,11 @@ def test_per_trail_dead_end_erases_a_peak_but_not_a_trail_going_on() -> None:
     b.came_from = 2
     act = b.step(perception(9, A_BIT, 0, (2, 8, A_BIT, 0), (1, 7, A_BIT, 0)))
     assert (b.task, b.trail, act.colour, act.move) == (Task.REMOVE, A_BIT, NO_COLOUR, 1)
+
+
+def test_per_trail_climber_keeps_to_the_trails_of_its_cell() -> None:
+    cell = (4, A_BIT, 0, (0, 5, A_BIT, 0), (1, 8, B_BIT, 0))
+    assert agent(trail_colours="per-trail").step(perception(*cell)).move == 0  # stays on A
+    assert agent().step(perception(4, TRAIL, 0, (0, 5, TRAIL, 0), (1, 8, TRAIL, 0))).move == 1
+    off = agent(trail_colours="per-trail").step(perception(4, 0, 0, *cell[3:]))
+    assert off.move == 1  # off the trails: the highest coloured cell, whichever trail
