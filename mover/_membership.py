@@ -64,6 +64,8 @@ class Membership:
         self._listeners: list[asyncio.Queue[MemberEvent]] = []
         self._on_leave: list[Callable[[str], None]] = []
         self._changed = asyncio.Event()
+        self._verifying: dict[str, list[asyncio.Future[bytes | None]]] = {}
+        self._asked: dict[str, float] = {}  # name -> when a hello was last asked unprompted
 
     # -- the public view ------------------------------------------------------------------------
 
@@ -178,14 +180,59 @@ class Membership:
         self._ask_hello(name)
 
     def _ask_hello(self, name: str, attempt: int = 0) -> None:
+        """Verify the holder of ``name``'s token; it joins once its hello answers."""
         node = self._node
         if node._session is None or name not in self._tokens or name in self._members:
             return
+        self._hello(name, attempt=attempt, join=True)
+
+    async def verify(self, name: str, timeout: float = 5.0, *, fresh: bool = False) -> bytes | None:
+        """``name``'s session, verified with a fresh challenge (asked now unless known, or if
+        ``fresh``); None if no member of that name answers within ``timeout``. Works for any
+        node of the team, members and observers alike (no liveliness token needed)."""
+        node = self._node
+        if not fresh:
+            epoch = node._sessions.verified(name)
+            if epoch is not None:
+                return epoch
+        future: asyncio.Future[bytes | None] = asyncio.get_running_loop().create_future()
+        waiting = self._verifying.setdefault(name, [])
+        waiting.append(future)
+        if len(waiting) == 1 and node._session is not None:
+            self._hello(name, attempt=_HELLO_RETRIES, join=False)
+        try:
+            async with asyncio.timeout(timeout):
+                return await asyncio.shield(future)
+        except TimeoutError:
+            return None
+        finally:
+            if future in waiting:
+                waiting.remove(future)
+            if not waiting:
+                self._verifying.pop(name, None)
+
+    def verify_soon(self, name: str) -> None:
+        """Ask ``name`` for its hello now, unless that was asked within the last second."""
+        now = time.monotonic()
+        if now - self._asked.get(name, -1e9) < 1.0 or self._node._session is None:
+            return
+        self._asked[name] = now
+        while len(self._asked) > 4096:
+            del self._asked[next(iter(self._asked))]
+        self._hello(name, attempt=_HELLO_RETRIES, join=False)
+
+    def _verified(self, name: str, epoch: bytes | None) -> None:
+        for future in self._verifying.get(name, ()):
+            if not future.done():
+                future.set_result(epoch)
+
+    def _hello(self, name: str, *, attempt: int, join: bool) -> None:
+        node = self._node
         challenge = os.urandom(16)
-        state: dict[str, Any] = {"ok": False, "refused": False}
+        state: dict[str, Any] = {"ok": False}
 
         def on_reply(reply: Any) -> None:
-            if reply.ok is None:
+            if reply.ok is None or state["ok"]:
                 return
             try:
                 env = node._opener.open(reply.ok.payload.to_bytes())
@@ -196,15 +243,22 @@ class Membership:
                     name, str(p["kind"]), float(p["started"]), int(p["pid"]), str(p["host"])
                 )
             except (WireError, AttributeError, KeyError, TypeError, ValueError) as exc:
-                state["refused"] = True
                 node._refusal_log.warn(name, f"hello from {name!r} refused: {exc}")
                 return
             state["ok"] = True
-            if name in self._tokens:
+            # Its session, as of this fresh answer: what it broadcast before does not count.
+            node._sessions.learn(name, env.epoch, env.counter)
+            self._verified(name, env.epoch)
+            if join and name in self._tokens:
                 self._join(info)
 
         def on_done(_: Any) -> None:
-            if state["ok"] or name not in self._tokens:
+            if state["ok"]:
+                return
+            if not join:
+                self._verified(name, None)
+                return
+            if name not in self._tokens:
                 return
             if attempt < _HELLO_RETRIES:
                 # No authentic answer (an overloaded machine, a link still coming up, or only

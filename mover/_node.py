@@ -27,7 +27,7 @@ from ._exceptions import MoverError, PayloadTooLarge, WireError
 from ._membership import Membership
 from ._radio import Locator, Message, Neighbour, Radio, RadioModel, Subscription
 from ._rpc import RpcClient, RpcServer, procedures_of
-from ._wire import DEFAULT_MAX_SIZE, Opener, Sealer, pack
+from ._wire import DEFAULT_MAX_SIZE, Opener, Sealer, Sessions, SessionUnknown, pack
 
 log = logging.getLogger("mover.node")
 
@@ -93,6 +93,7 @@ class Node:
         self.radio = Radio(locator, radio)
         self._sealer = Sealer(team.name, name, team.key, max_size=max_size)
         self._opener = Opener(team.name, team.key, max_size=max_size)
+        self._sessions = Sessions()
         self._refusal_log = _RateLimitedLog(name)
         self._server = RpcServer(self)
         self._client = RpcClient(self)
@@ -331,18 +332,27 @@ class Node:
     def _on_bc(self, sample: Any) -> None:
         try:
             env = self._opener.open(sample.payload.to_bytes())
+            if env.sender == self.name:
+                return
             payload = env.payload
             if env.kind != "bc" or not isinstance(payload, list) or len(payload) != 2:
                 raise WireError("not a broadcast envelope")
             topic, items = payload
-            if not isinstance(items, list):
+            if not isinstance(topic, str) or not isinstance(items, list):
                 raise WireError("not a broadcast envelope")
+            self._sessions.admit(env, self.name, self._sealer.epoch)
+        except SessionUnknown as exc:
+            # a member this node has not verified yet (it just joined, or we did): ask for its
+            # hello; what it sent before that does not count
+            self.stats["refused.unverified"] += 1
+            self.team.verify_soon(exc.envelope.sender)
+            return
         except WireError as exc:
             self.stats["refused"] += 1
             self._refusal_log.warn("bc", f"dropped a broadcast on {sample.key_expr}: {exc}")
             return
         entry = self._subs.get(topic)
-        if env.sender == self.name or entry is None:
+        if entry is None:
             return
         messages = self.radio.receive_all(env.sender, topic, items, env.timestamp)
         if messages:
@@ -364,11 +374,12 @@ class Node:
     def _on_ctl(self, sample: Any) -> None:
         try:
             env = self._opener.open(sample.payload.to_bytes())
+            self._sessions.admit(env, self.name, self._sealer.epoch)
         except WireError as exc:
             self.stats["refused"] += 1
             self._refusal_log.warn("ctl", f"dropped a control message: {exc}")
             return
-        if env.kind == "cancel" and env.recipient == self.name and isinstance(env.payload, int):
+        if env.kind == "cancel" and type(env.payload) is int:
             self._server.cancel(env.sender, env.payload)
 
     def _member_left(self, name: str) -> None:

@@ -138,6 +138,10 @@ class Subscription:
         self.close()
 
 
+def _is_number(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+
+
 def _wrap(angle: float) -> float:
     a = math.fmod(angle + math.pi, 2 * math.pi)
     if a <= 0:
@@ -155,6 +159,7 @@ class Radio:
         self._neighbours: dict[str, Neighbour] = {}
         self.out_of_range = 0
         self.lost = 0
+        self.malformed = 0  # authentic items with a wrong position or range
 
     def position(self) -> tuple[float, float, float] | None:
         return self.locator.position() if self.locator is not None else None
@@ -177,10 +182,16 @@ class Radio:
             if not (isinstance(item, list) and len(item) == 3):
                 continue
             data, where, reach = item
+            if not (reach is None or _is_number(reach)) or not (
+                where is None
+                or (isinstance(where, list) and len(where) >= 2 and all(map(_is_number, where)))
+            ):
+                self.malformed += 1  # authentic but wrong: skip it, keep the rest
+                continue
             if where != last_where:  # a burst from one place: compute once
                 last_where = where
                 distance = bearing = None
-                if me is not None and isinstance(where, list) and len(where) >= 2:
+                if me is not None and where is not None:
                     dx, dy = float(where[0]) - me[0], float(where[1]) - me[1]
                     distance = math.hypot(dx, dy)
                     bearing = _wrap(math.atan2(dy, dx) - me[2])

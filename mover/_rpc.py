@@ -33,7 +33,7 @@ from ._exceptions import (
     WireError,
 )
 from ._signature import Signature
-from ._wire import Envelope, EnvelopeRefused, read_refusal, refusal
+from ._wire import Envelope, EnvelopeRefused, SessionChanged, read_refusal, refusal
 
 if TYPE_CHECKING:
     from ._node import Node
@@ -101,14 +101,14 @@ class RpcServer:
             env = node._opener.open(frame)
             if env.kind != "call":
                 raise EnvelopeRefused(f"a {env.kind!r} envelope is not a call", env)
-            if env.recipient != node.name:
-                raise EnvelopeRefused(f"a call for {env.recipient!r}, not for {node.name!r}", env)
+            node._sessions.admit(env, node.name, node._sealer.epoch)
         except WireError as exc:
             node.stats["refused"] += 1
             node._refusal_log.warn("rpc", f"refused a call: {exc}")
             if isinstance(exc, EnvelopeRefused) and exc.envelope.kind == "call":
                 # authentic but refused: a sealed answer its sender can believe
-                self._send(query, exc.envelope, _err("Refused", str(exc)))
+                kind = "SessionChanged" if isinstance(exc, SessionChanged) else "Refused"
+                self._send(query, exc.envelope, _err(kind, str(exc)))
                 return
             with query:
                 if node.on_refused == "reply":
@@ -199,10 +199,14 @@ class RpcServer:
         node = self.node
         with query:
             try:
-                frame = node._sealer.seal("reply", reply, env.call_id, to=env.sender)
+                frame = node._sealer.seal(
+                    "reply", reply, env.call_id, to=env.sender, to_epoch=env.epoch
+                )
             except WireError as exc:
                 failed = _err("WireError", f"cannot send the result: {exc}")
-                frame = node._sealer.seal("reply", failed, env.call_id, to=env.sender)
+                frame = node._sealer.seal(
+                    "reply", failed, env.call_id, to=env.sender, to_epoch=env.epoch
+                )
             try:
                 query.reply(_keys.rpc(node.team_name, node.name), frame, express=True)
                 node.stats["sent.reply"] += 1
@@ -245,11 +249,51 @@ class RpcClient:
         kwargs: dict[str, Any],
         timeout: float | None,
     ) -> Any:
-        node = self.node
         _keys.check_name("robot", robot)
+        loop = asyncio.get_running_loop()
+        deadline = None if timeout is None else loop.time() + timeout
+        for attempt in (1, 2):
+            left = None if deadline is None else max(0.0, deadline - loop.time())
+            epoch = await self._session_of(robot, procedure, left, fresh=attempt > 1)
+            try:
+                return await self._call(robot, epoch, procedure, args, kwargs, timeout, left)
+            except _SessionChanged:  # the callee restarted since we learned its session
+                continue
+        raise Refused(f"{robot!r} keeps changing sessions", robot=robot, procedure=procedure)
+
+    async def _session_of(
+        self, robot: str, procedure: str, timeout: float | None, *, fresh: bool
+    ) -> bytes:
+        """The callee's session, verified with a challenge (asked now if not known yet)."""
+        node = self.node
+        if robot == node.name:
+            return node._sealer.epoch
+        epoch = None if fresh else node._sessions.verified(robot)
+        if epoch is None:
+            epoch = await node.team.verify(robot, timeout=min(timeout or 5.0, 5.0), fresh=fresh)
+        if epoch is None:
+            raise UnknownRobot(
+                f"no member {robot!r} of team {node.team_name!r} answers",
+                robot=robot,
+                procedure=procedure,
+            )
+        return epoch
+
+    async def _call(
+        self,
+        robot: str,
+        epoch: bytes,
+        procedure: str,
+        args: tuple[Any, ...],
+        kwargs: dict[str, Any],
+        timeout: float | None,
+        left: float | None,
+    ) -> Any:
+        node = self.node
         self._next_id += 1
         call_id = self._next_id
-        frame = node._sealer.seal("call", [procedure, list(args), kwargs], call_id, to=robot)
+        payload = [procedure, list(args), kwargs]
+        frame = node._sealer.seal("call", payload, call_id, to=robot, to_epoch=epoch)
         future: asyncio.Future[Any] = asyncio.get_running_loop().create_future()
         member = robot in node.team
         self.pending[call_id] = _Pending(robot, procedure, future, member)
@@ -265,15 +309,15 @@ class RpcClient:
                 payload=frame,
                 target=zenoh.QueryTarget.ALL,
                 consolidation=zenoh.ConsolidationMode.NONE,
-                timeout=(timeout + 1.0) if timeout is not None else _NO_TIMEOUT,
+                timeout=(left + 1.0) if left is not None else _NO_TIMEOUT,
                 express=True,
             )
             node.stats["sent.call"] += 1
             try:
-                async with asyncio.timeout(timeout):
+                async with asyncio.timeout(left):
                     return await future
             except TimeoutError:
-                self._cancel_remote(robot, call_id)
+                self._cancel_remote(robot, epoch, call_id)
                 said = self.pending[call_id].refusal
                 heard = f" (an unauthenticated refusal said: {said})" if said else ""
                 raise CallTimeout(
@@ -283,17 +327,17 @@ class RpcClient:
                 ) from None
             except asyncio.CancelledError:
                 if future.cancelled():  # awaiting it was cancelled, not answered
-                    self._cancel_remote(robot, call_id)
+                    self._cancel_remote(robot, epoch, call_id)
                 raise
         finally:
             self.pending.pop(call_id, None)
 
-    def _cancel_remote(self, robot: str, call_id: int) -> None:
+    def _cancel_remote(self, robot: str, epoch: bytes, call_id: int) -> None:
         node = self.node
         try:
             node._session.put(
                 _keys.ctl(node.team_name, robot),
-                node._sealer.seal("cancel", call_id, call_id, to=robot),
+                node._sealer.seal("cancel", call_id, call_id, to=robot, to_epoch=epoch),
             )
             node.stats["sent.cancel"] += 1
         except Exception as exc:
@@ -317,13 +361,9 @@ class RpcClient:
             return
         try:
             env = node._opener.open(frame)
-            if (
-                env.kind != "reply"
-                or env.sender != p.robot
-                or env.call_id != call_id
-                or env.recipient != node.name
-            ):
+            if env.kind != "reply" or env.sender != p.robot or env.call_id != call_id:
                 raise WireError("reply does not match the call")
+            node._sessions.admit(env, node.name, node._sealer.epoch)
             body = env.payload
             if not isinstance(body, dict):
                 raise WireError("reply body is not a map")
@@ -334,6 +374,8 @@ class RpcClient:
         node.stats["recv.reply"] += 1
         if "ok" in body:
             p.future.set_result(body["ok"])
+        elif isinstance(body.get("err"), dict) and body["err"].get("type") == "SessionChanged":
+            p.future.set_exception(_SessionChanged())
         else:
             p.future.set_exception(self._error(p, body.get("err")))
 
@@ -386,3 +428,7 @@ class RpcClient:
         for p in self.pending.values():
             if not p.future.done():
                 p.future.set_exception(NodeClosed("the node closed during the call"))
+
+
+class _SessionChanged(Exception):
+    """The callee answered that the call was for an earlier session of it: ask again."""

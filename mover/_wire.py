@@ -2,8 +2,8 @@
 
 A team frame is ``b"M2" + u16 header length (big-endian) + header + ciphertext``:
 
-* ``header`` is the msgpack array ``[version, team, sender, recipient, kind, call_id,
-  timestamp, nonce]``, sent in the clear and authenticated;
+* ``header`` is the msgpack array ``[version, team, sender, recipient, to_epoch, kind,
+  call_id, timestamp, nonce]``, sent in the clear and authenticated;
 * ``ciphertext`` is the msgpack payload sealed with ChaCha20-Poly1305 (16-byte tag), the header
   as associated data, under a key derived for the sender's session:
   ``HKDF-SHA256(team key, salt=epoch, info=b"mover/2/" + sender)``;
@@ -11,12 +11,14 @@ A team frame is ``b"M2" + u16 header length (big-endian) + header + ciphertext``
   big-endian 8-byte counter; the AEAD nonce is four zero bytes and the counter, unique under a
   session's key.
 
-``recipient`` binds a call, a reply or a cancel to the one member it is for (empty for
-broadcasts and hellos, whose topic or challenge is in the sealed payload), so that an envelope
-overheard on its way to one member is refused by any other. ``timestamp`` is the sender's Unix
-time. An outsider without the key sees the header (who sends what kind of message to whom, and
-when), the sizes and the timing — never a payload. A refusal, sent to a caller that could not
-be authenticated, is the unsigned frame ``b"MR" + reason`` (UTF-8): a caller never believes one
+``recipient`` and ``to_epoch`` bind a call, a reply or a cancel to the one member it is for and
+to that member's session (both empty for broadcasts and hellos, whose topic or challenge is in
+the sealed payload), so that an envelope overheard on its way to one member is refused by any
+other, and by the same member once it has restarted. ``timestamp`` is the sender's Unix time,
+for information only: freshness never depends on wall clocks (see :class:`Sessions`). An
+outsider without the key sees the header (who sends what kind of message to whom, and when),
+the sizes and the timing — never a payload. A refusal, sent to a caller that could not be
+authenticated, is the unsigned frame ``b"MR" + reason`` (UTF-8): a caller never believes one
 while an authentic answer may still come (see ``_rpc``).
 
 numpy arrays travel as msgpack extension type 1 whose data is::
@@ -123,23 +125,41 @@ class Envelope:
     nonce: bytes
     payload: Any
     recipient: str = ""
+    to_epoch: bytes = b""
     version: int = VERSION
+
+    @property
+    def epoch(self) -> bytes:
+        """The sender's session (its node's random epoch)."""
+        return self.nonce[:8]
+
+    @property
+    def counter(self) -> int:
+        """The sender's envelope counter in its session."""
+        return int.from_bytes(self.nonce[8:], "big")
 
 
 class EnvelopeRefused(WireError):
-    """An authentic envelope refused all the same (replayed, stale, for someone else): the
-    refuser can answer its sender with a sealed refusal, which the sender can believe."""
+    """An authentic envelope refused all the same (replayed, for someone else): the refuser can
+    answer its sender with a sealed refusal, which the sender can believe."""
 
     def __init__(self, message: str, envelope: Envelope) -> None:
         super().__init__(message)
         self.envelope = envelope
 
 
+class SessionChanged(EnvelopeRefused):
+    """An envelope for an earlier session of its recipient (which has restarted since)."""
+
+
+class SessionUnknown(EnvelopeRefused):
+    """A broadcast from a session this node has not verified yet (see :class:`Sessions`)."""
+
+
 def session_key(team_key: bytes, sender: str, epoch: bytes) -> ChaCha20Poly1305:
     """The AEAD of one sender's session (see the module docstring)."""
-    hkdf = HKDF(
-        algorithm=hashes.SHA256(), length=32, salt=epoch, info=b"mover/2/" + sender.encode()
-    )
+    info = b"mover/2/" + sender.encode()
+    hkdf = HKDF(algorithm=hashes.SHA256(), length=32, salt=epoch, info=info)
     return ChaCha20Poly1305(hkdf.derive(team_key))
 
 
@@ -149,22 +169,28 @@ class Sealer:
     def __init__(self, team: str, sender: str, key: bytes, *, max_size: int = DEFAULT_MAX_SIZE):
         self.team = team
         self.sender = sender
-        self._epoch = os.urandom(8)
-        self._aead = session_key(key, sender, self._epoch)
+        self.epoch = os.urandom(8)
+        self._aead = session_key(key, sender, self.epoch)
         self._counter = 0
         self.max_size = max_size
 
-    def seal(self, kind: str, payload: Any, call_id: int = 0, *, to: str = "") -> bytes:
-        """Return the sealed frame of a new envelope for ``to`` (empty: the team, or whoever
-        asked); raise PayloadTooLarge over the limit."""
-        return self.seal_packed(kind, pack(payload), call_id, to=to)
+    def seal(
+        self, kind: str, payload: Any, call_id: int = 0, *, to: str = "", to_epoch: bytes = b""
+    ) -> bytes:
+        """Return the sealed frame of a new envelope for ``to`` in its session ``to_epoch``
+        (empty: the team, or whoever asked); raise PayloadTooLarge over the limit."""
+        return self.seal_packed(kind, pack(payload), call_id, to=to, to_epoch=to_epoch)
 
-    def seal_packed(self, kind: str, payload: bytes, call_id: int = 0, *, to: str = "") -> bytes:
+    def seal_packed(
+        self, kind: str, payload: bytes, call_id: int = 0, *, to: str = "", to_epoch: bytes = b""
+    ) -> bytes:
         """Like :meth:`seal` for a payload already encoded with :func:`pack`."""
         self._counter += 1
         counter = self._counter.to_bytes(8, "big")
-        nonce = self._epoch + counter
-        header = pack([VERSION, self.team, self.sender, to, kind, call_id, time.time(), nonce])
+        nonce = self.epoch + counter
+        header = pack(
+            [VERSION, self.team, self.sender, to, to_epoch, kind, call_id, time.time(), nonce]
+        )
         size = 4 + len(header) + len(payload) + TAG_SIZE
         if size > self.max_size:
             raise PayloadTooLarge(
@@ -174,67 +200,82 @@ class Sealer:
         return SIGNED + len(header).to_bytes(2, "big") + header + sealed
 
 
-class ReplayGuard:
-    """Refuses envelopes that are stale or seen before, in bounded memory.
+class Sessions:
+    """Which envelopes are fresh, without trusting anyone's wall clock, in bounded memory.
 
-    Each sender epoch keeps the highest counter seen and a bitmap of the last ``window`` counters
-    (as IPsec does), so envelopes that arrive a little out of order across zenoh's threads pass
-    once. Envelopes older than ``max_age`` seconds (or that far in the future) are refused
-    outright, which bounds how long an epoch must be remembered; at most ``sessions`` epochs
-    are remembered (the least recently heard go first), and a counter that jumps ahead by more
-    than the window clears the bitmap instead of growing it.
+    * An envelope addressed to this node (a call, a reply, a cancel) names this node's session
+      (``to_epoch``), so it was made during this node's lifetime: a replay to another member,
+      or to this member after a restart, is refused. Within the session, each sender session
+      keeps the highest counter seen and a bitmap of the last ``window`` counters (as IPsec
+      does), so envelopes a little out of order across zenoh's threads pass once.
+    * A broadcast counts only from a sender session this node has verified with a challenge
+      (the signed hello membership performs, :meth:`learn`), and only if it was sent after that
+      hello (its counter is above the one the hello carried): a broadcast overheard before a
+      member joined, or before a sender restarted, is refused.
+    * At most ``sessions`` sender sessions are remembered (the least recently heard go first);
+      a counter that jumps ahead by more than the window clears the bitmap instead of growing.
     """
 
-    def __init__(
-        self, *, max_age: float = 30.0, window: int = 4096, sessions: int = MAX_SESSIONS
-    ) -> None:
-        self.max_age = max_age
+    def __init__(self, *, window: int = 4096, sessions: int = MAX_SESSIONS) -> None:
         self.window = window
         self.sessions = sessions
         self._mask = (1 << window) - 1
-        self._epochs: dict[bytes, list[Any]] = {}  # epoch -> [highest, bitmap, last_seen]
-        self._next_prune = 0.0
+        self._state: dict[bytes, list[int]] = {}  # epoch -> [highest, bitmap]
+        self._verified: dict[str, tuple[bytes, int]] = {}  # sender -> (epoch, counter at hello)
 
-    def check(self, env: Envelope, now: float | None = None) -> str | None:
-        """Record the envelope; return why it is refused, or None if it is fresh."""
-        now = time.time() if now is None else now
-        if abs(now - env.timestamp) > self.max_age:
-            return f"stale timestamp ({now - env.timestamp:+.1f} s)"
-        if len(env.nonce) != 16:
-            return "malformed nonce"
-        epoch, counter = env.nonce[:8], int.from_bytes(env.nonce[8:], "big")
-        state = self._epochs.pop(epoch, None)  # re-inserted last: the dict is in LRU order
+    def learn(self, sender: str, epoch: bytes, counter: int) -> None:
+        """``sender``'s current session, verified by a fresh challenge at ``counter``."""
+        self._verified[sender] = (epoch, counter)
+        self._verified[sender] = self._verified.pop(sender)  # most recent last
+        while len(self._verified) > self.sessions:
+            del self._verified[next(iter(self._verified))]
+
+    def verified(self, sender: str) -> bytes | None:
+        """``sender``'s verified session, if any."""
+        known = self._verified.get(sender)
+        return None if known is None else known[0]
+
+    def admit(self, env: Envelope, me: str, my_epoch: bytes) -> None:
+        """Record a fresh envelope, or raise :class:`EnvelopeRefused` saying why not."""
+        if env.kind == "hello":  # answers our own fresh challenge: checked by the asker
+            return
+        known = self._verified.get(env.sender)
+        if env.recipient or env.to_epoch:
+            if env.recipient != me:
+                raise EnvelopeRefused(f"an envelope for {env.recipient!r}, not for {me!r}", env)
+            if env.to_epoch != my_epoch:
+                raise SessionChanged(f"an envelope for an earlier session of {me!r}", env)
+            # Made during this session of ours: the window of the sender's session (whichever
+            # it is: a sender that just restarted may call before we verified it) suffices.
+        elif known is None or known[0] != env.epoch:
+            raise SessionUnknown(f"a broadcast from an unverified session of {env.sender!r}", env)
+        elif env.counter <= known[1]:
+            raise EnvelopeRefused(f"a broadcast of {env.sender!r} from before we met", env)
+        why = self._window(env.epoch, env.counter)
+        if why is not None:
+            raise EnvelopeRefused(f"refused envelope from {env.sender!r}: {why}", env)
+
+    def _window(self, epoch: bytes, counter: int) -> str | None:
+        state = self._state.pop(epoch, None)  # re-inserted last: the dict is in LRU order
+        why = None
         if state is None:
-            state = [counter, 1, now]
+            state = [counter, 1]
         else:
-            highest, bitmap = state[0], state[1]
+            highest, bitmap = state
             if counter > highest:
                 shift = counter - highest
-                bitmap = ((bitmap << shift) | 1) & self._mask if shift < self.window else 1
+                state[1] = ((bitmap << shift) | 1) & self._mask if shift < self.window else 1
                 state[0] = counter
+            elif highest - counter >= self.window:
+                why = "replayed (too old for the window)"
+            elif bitmap >> (highest - counter) & 1:
+                why = "replayed nonce"
             else:
-                offset = highest - counter
-                if offset >= self.window:
-                    self._epochs[epoch] = state
-                    return "replayed (too old for the window)"
-                if bitmap >> offset & 1:
-                    self._epochs[epoch] = state
-                    return "replayed nonce"
-                bitmap |= 1 << offset
-            state[1] = bitmap
-            state[2] = now
-        self._epochs[epoch] = state
-        while len(self._epochs) > self.sessions:
-            del self._epochs[next(iter(self._epochs))]
-        if now >= self._next_prune:
-            self._prune(now)
-        return None
-
-    def _prune(self, now: float) -> None:
-        horizon = now - 2 * self.max_age
-        for epoch in [e for e, s in self._epochs.items() if s[2] < horizon]:
-            del self._epochs[epoch]
-        self._next_prune = now + self.max_age
+                state[1] = bitmap | 1 << (highest - counter)
+        self._state[epoch] = state
+        while len(self._state) > self.sessions:
+            del self._state[next(iter(self._state))]
+        return why
 
 
 class Opener:
@@ -244,11 +285,11 @@ class Opener:
         self.team = team
         self._key = key
         self.max_size = max_size
-        self.guard = ReplayGuard()
-        self._sessions: dict[tuple[str, bytes], ChaCha20Poly1305] = {}
+        self._keys: dict[tuple[str, bytes], ChaCha20Poly1305] = {}
 
     def open(self, frame: bytes) -> Envelope:
-        """Return the envelope in a sealed frame, or raise WireError saying why it is refused."""
+        """Return the envelope in a sealed frame (authentic, not yet judged fresh: see
+        :class:`Sessions`), or raise WireError saying why it is refused."""
         if len(frame) > self.max_size:
             raise PayloadTooLarge(f"frame of {len(frame)} bytes is over the limit")
         if frame[:2] != SIGNED or len(frame) < 4 + TAG_SIZE:
@@ -256,9 +297,9 @@ class Opener:
         n = int.from_bytes(frame[2:4], "big")
         header, sealed = frame[4 : 4 + n], frame[4 + n :]
         fields = unpack(header, max_size=self.max_size)
-        if not isinstance(fields, list) or len(fields) != 8:
-            raise WireError("envelope header is not an 8-field array")
-        version, team, sender, recipient, kind, call_id, timestamp, nonce = fields
+        if not isinstance(fields, list) or len(fields) != 9:
+            raise WireError("envelope header is not a 9-field array")
+        version, team, sender, recipient, to_epoch, kind, call_id, timestamp, nonce = fields
         if version != VERSION:
             raise WireError(f"unsupported envelope version {version!r}")
         if team != self.team:
@@ -266,6 +307,7 @@ class Opener:
         if not (
             isinstance(sender, str)
             and isinstance(recipient, str)
+            and isinstance(to_epoch, bytes)
             and isinstance(kind, str)
             and type(call_id) is int
             and isinstance(timestamp, (int, float))
@@ -279,21 +321,25 @@ class Opener:
         except InvalidTag:
             raise WireError("bad signature (no key, or another team's key)") from None
         payload = unpack(plain, max_size=self.max_size)
-        env = Envelope(
-            team, sender, kind, call_id, float(timestamp), nonce, payload, recipient=recipient
+        return Envelope(
+            team,
+            sender,
+            kind,
+            call_id,
+            float(timestamp),
+            nonce,
+            payload,
+            recipient=recipient,
+            to_epoch=to_epoch,
         )
-        why = self.guard.check(env)
-        if why is not None:
-            raise EnvelopeRefused(f"refused envelope from {sender!r}: {why}", env)
-        return env
 
     def _aead(self, sender: str, epoch: bytes) -> ChaCha20Poly1305:
-        aead = self._sessions.pop((sender, epoch), None)  # re-inserted last: LRU order
+        aead = self._keys.pop((sender, epoch), None)  # re-inserted last: LRU order
         if aead is None:
             aead = session_key(self._key, sender, epoch)
-        self._sessions[(sender, epoch)] = aead
-        if len(self._sessions) > MAX_SESSIONS:
-            del self._sessions[next(iter(self._sessions))]
+        self._keys[(sender, epoch)] = aead
+        if len(self._keys) > MAX_SESSIONS:
+            del self._keys[next(iter(self._keys))]
         return aead
 
 

@@ -189,7 +189,9 @@ async def test_replayed_envelope_is_refused(world: tuple[Cluster, Node]) -> None
     c, node = world
     before = await node.call("r2", "bumps", timeout=5)
     sealer = Sealer(c.team.name, "tester", c.team.key)
-    frame = sealer.seal("call", ["bump", [], {}], 999_999, to="r2")
+    r2 = node._sessions.verified("r2")  # the session the tester verified r2 in
+    assert r2 is not None
+    frame = sealer.seal("call", ["bump", [], {}], 999_999, to="r2", to_epoch=r2)
     answers = [await _raw_get(node, "mover/alpha/rpc/r2", frame) for _ in range(2)]
     opener = Opener(c.team.name, c.team.key)
     first, second = (opener.open(a) for a in answers)  # sealed answers, to the tester

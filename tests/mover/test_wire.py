@@ -2,13 +2,19 @@
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 import pytest
 
 from mover import PayloadTooLarge, WireError, pack, unpack
-from mover._wire import Envelope, Opener, ReplayGuard, Sealer
+from mover._wire import (
+    Envelope,
+    EnvelopeRefused,
+    Opener,
+    Sealer,
+    SessionChanged,
+    Sessions,
+    SessionUnknown,
+)
 
 KEY = b"k" * 32
 
@@ -60,10 +66,16 @@ def test_malformed_input_raises_wire_error() -> None:
 
 
 def test_seal_and_open() -> None:
-    frame = Sealer("alpha", "ernst", KEY).seal("call", ["add", [1, 2], {}], 7)
+    frame = Sealer("alpha", "ernst", KEY).seal("call", ["add", [1, 2], {}], 7, to="hugo")
     env = Opener("alpha", KEY).open(frame)
-    assert (env.sender, env.kind, env.call_id) == ("ernst", "call", 7)
+    assert (env.sender, env.kind, env.call_id, env.recipient) == ("ernst", "call", 7, "hugo")
     assert env.payload == ["add", [1, 2], {}]
+
+
+def test_payloads_are_encrypted() -> None:
+    frame = Sealer("alpha", "ernst", KEY).seal("bc", ["news", [["the-secret-4711", None, None]]])
+    assert b"the-secret-4711" not in frame and b"news" not in frame
+    assert b"ernst" in frame  # the header is authenticated, not hidden
 
 
 def test_wrong_key_or_team_is_refused() -> None:
@@ -72,34 +84,73 @@ def test_wrong_key_or_team_is_refused() -> None:
         Opener("alpha", b"x" * 32).open(frame)
     with pytest.raises(WireError, match="team 'alpha'"):
         Opener("beta", KEY).open(frame)
-    tampered = frame[:-40] + bytes([frame[-40] ^ 1]) + frame[-39:]
+    tampered = frame[:-20] + bytes([frame[-20] ^ 1]) + frame[-19:]
     with pytest.raises(WireError, match="bad signature"):
         Opener("alpha", KEY).open(tampered)
+    header_changed = frame.replace(b"ernst", b"ernsT")  # the header is authenticated too
+    with pytest.raises(WireError, match="bad signature"):
+        Opener("alpha", KEY).open(header_changed)
+
+
+def _addressed(n: int) -> tuple[Sealer, Opener, Sessions, list[Envelope]]:
+    sealer, opener, sessions = Sealer("alpha", "ernst", KEY), Opener("alpha", KEY), Sessions()
+    frames = [sealer.seal("call", i, i, to="hugo", to_epoch=b"H" * 8) for i in range(n)]
+    return sealer, opener, sessions, [opener.open(f) for f in frames]
 
 
 def test_replay_is_refused_and_out_of_order_accepted() -> None:
+    _, _, sessions, envs = _addressed(5)
+    for e in (envs[1], envs[0], envs[4], envs[2]):
+        sessions.admit(e, "hugo", b"H" * 8)
+    with pytest.raises(EnvelopeRefused, match="replayed"):
+        sessions.admit(envs[0], "hugo", b"H" * 8)
+    sessions.admit(envs[3], "hugo", b"H" * 8)
+    with pytest.raises(EnvelopeRefused, match="replayed"):
+        sessions.admit(envs[3], "hugo", b"H" * 8)
+
+
+def test_an_envelope_for_someone_else_or_an_earlier_session_is_refused() -> None:
+    _, _, sessions, envs = _addressed(1)
+    with pytest.raises(EnvelopeRefused, match="for 'hugo', not for 'elvis'"):
+        sessions.admit(envs[0], "elvis", b"H" * 8)
+    with pytest.raises(SessionChanged, match="earlier session of 'hugo'"):
+        sessions.admit(envs[0], "hugo", b"N" * 8)  # hugo restarted since
+
+
+def test_broadcasts_count_only_from_a_verified_session_and_after_we_met() -> None:
     sealer, opener = Sealer("alpha", "ernst", KEY), Opener("alpha", KEY)
-    frames = [sealer.seal("bc", i) for i in range(5)]
-    for f in (frames[1], frames[0], frames[4], frames[2]):
-        opener.open(f)
-    with pytest.raises(WireError, match="replayed"):
-        opener.open(frames[0])
-    opener.open(frames[3])
-    with pytest.raises(WireError, match="replayed"):
-        opener.open(frames[3])
+    early = opener.open(sealer.seal("bc", "overheard before we met"))
+    sessions = Sessions()
+    with pytest.raises(SessionUnknown):
+        sessions.admit(early, "hugo", b"H" * 8)
+    hello = opener.open(sealer.seal("hello", {"challenge": b"c"}))
+    sessions.admit(hello, "hugo", b"H" * 8)  # a hello answers our challenge: always let in
+    sessions.learn("ernst", hello.epoch, hello.counter)
+    with pytest.raises(EnvelopeRefused, match="before we met"):
+        sessions.admit(early, "hugo", b"H" * 8)  # a replay to a late joiner
+    fresh = opener.open(sealer.seal("bc", "after"))
+    sessions.admit(fresh, "hugo", b"H" * 8)
+    with pytest.raises(EnvelopeRefused, match="replayed"):
+        sessions.admit(fresh, "hugo", b"H" * 8)
+    restarted = Sealer("alpha", "ernst", KEY)  # same name, new session
+    with pytest.raises(SessionUnknown):
+        sessions.admit(opener.open(restarted.seal("bc", "x")), "hugo", b"H" * 8)
 
 
-def test_stale_and_too_old_envelopes_are_refused() -> None:
-    guard = ReplayGuard(max_age=30, window=8)
-    now = time.time()
-
-    def env(counter: int, ts: float = now) -> Envelope:
-        return Envelope("alpha", "s", "bc", 0, ts, b"E" * 8 + counter.to_bytes(8, "big"), None)
-
-    assert guard.check(env(1, now - 31), now) == "stale timestamp (+31.0 s)"
-    assert guard.check(env(20), now) is None
-    assert guard.check(env(5), now) == "replayed (too old for the window)"
-    assert guard.check(env(19), now) is None
+def test_replay_state_is_bounded_whatever_the_counter_does() -> None:
+    sessions = Sessions(window=64, sessions=8)
+    opener = Opener("alpha", KEY)
+    sealer = Sealer("alpha", "ernst", KEY)
+    sealer._counter = 2**62  # a counter that jumps far ahead
+    env = opener.open(sealer.seal("call", 0, 0, to="hugo", to_epoch=b"H" * 8))
+    sessions.admit(env, "hugo", b"H" * 8)
+    assert all(state[1].bit_length() <= 64 for state in sessions._state.values())
+    for _ in range(20):  # more sessions than it keeps
+        s2 = Sealer("alpha", "ernst", KEY)
+        sessions.admit(
+            opener.open(s2.seal("call", 0, 0, to="hugo", to_epoch=b"H" * 8)), "hugo", b"H" * 8
+        )
+    assert len(sessions._state) <= 8
 
 
 def test_size_limit() -> None:
