@@ -12,6 +12,7 @@ import asyncio
 import time
 from collections.abc import AsyncIterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 import pytest_asyncio
@@ -71,3 +72,99 @@ async def test_an_outsider_captures_no_call_and_reads_no_payload(
     for _ in range(20):
         assert await node.call("r1", "add", 1, 2, timeout=5) == 3
     assert (time.monotonic() - t0) / 20 < 0.1
+
+
+async def _capture(node: Node, key: str, send: Any) -> bytes:
+    """The first frame that ``send()`` puts on ``key``, as an eavesdropper records it."""
+    got: asyncio.Future[bytes] = asyncio.get_running_loop().create_future()
+    loop = asyncio.get_running_loop()
+
+    def on_sample(sample: Any) -> None:
+        frame = bytes(sample.payload.to_bytes())
+        loop.call_soon_threadsafe(lambda: got.done() or got.set_result(frame))
+
+    sub = node.zenoh_session.declare_subscriber(key, on_sample)
+    try:
+        await asyncio.sleep(0.3)  # the subscription reaches the sender
+        await send()
+        return await asyncio.wait_for(got, 5)
+    finally:
+        sub.undeclare()
+
+
+async def _heard(node: Node, robot: str, topic: str) -> list[Any]:
+    return [h[1] for h in await node.call(robot, "heard", topic, timeout=5)]
+
+
+async def test_a_broadcast_replayed_to_a_late_joiner_is_refused(
+    world: tuple[Cluster, Node],
+) -> None:
+    c, node = world
+    frame = await _capture(
+        node,
+        f"mover/{c.team.name}/bc/chatter",
+        lambda: node.call("r1", "send", "chatter", "before r5 joined", None, timeout=5),
+    )
+    await c.robot("r5")
+    await node.team.wait_for({"r5"}, timeout=10)
+    await asyncio.sleep(0.5)  # r5 has verified r1 by now
+    node.zenoh_session.put(f"mover/{c.team.name}/bc/chatter", frame)
+    await node.call("r1", "send", "chatter", "after r5 joined", None, timeout=5)
+    async with asyncio.timeout(10):
+        while "after r5 joined" not in await _heard(node, "r5", "chatter"):
+            await asyncio.sleep(0.05)
+    assert await _heard(node, "r5", "chatter") == ["after r5 joined"]  # never the replay
+
+
+async def test_a_call_replayed_to_a_restarted_member_is_refused(
+    world: tuple[Cluster, Node],
+) -> None:
+    c, node = world
+    proc = await c.robot("r6")
+    await node.team.wait_for({"r6"}, timeout=10)
+    key = f"mover/{c.team.name}/rpc/r6"
+    overheard: list[bytes] = []
+    queryable = node.zenoh_session.declare_queryable(
+        key, lambda q: overheard.append(bytes(q.payload.to_bytes())) or q.drop()
+    )
+    await asyncio.sleep(0.3)
+    assert await node.call("r6", "bump", timeout=5) == 1
+    queryable.undeclare()
+    assert overheard, "the eavesdropper overheard no call"
+    proc.kill()
+    await proc.wait()
+    await node.team.wait_gone("r6", timeout=10)
+    await c.robot("r6")
+    await node.team.wait_for({"r6"}, timeout=10)
+    answers = [await _raw_get(node, key, frame) for frame in overheard]
+    assert all(a.startswith(b"M2") for a in answers)  # sealed refusals, for the tester
+    assert await node.call("r6", "bumps", timeout=5) == 0  # the replay ran nothing
+
+
+@pytest.mark.parametrize("skew", [3600.0, -3600.0])
+async def test_a_member_whose_clock_is_an_hour_off_works(
+    world: tuple[Cluster, Node], skew: float
+) -> None:
+    c, node = world
+    name = "late" if skew > 0 else "early"
+    await c.start("tests.helpers.skewed", str(skew), "tests.helpers.robot_proc", "--name", name)
+    await node.team.wait_for({name}, timeout=10)
+    assert await node.call(name, "add", 1, 2, timeout=5) == 3
+    assert await node.call(name, "call_other", "r1", "add", [40, 2], timeout=5) == 42
+    await node.call(name, "send", "news", {"from": name}, None, timeout=5)
+    async with asyncio.timeout(10):
+        while {"from": name} not in await _heard(node, "r1", "news"):
+            await node.call(name, "send", "news", {"from": name}, None, timeout=5)
+            await asyncio.sleep(0.1)
+
+
+async def _raw_get(node: Node, key: str, frame: bytes) -> bytes:
+    """A raw zenoh get (no mover client), returning the first reply's bytes."""
+
+    def get() -> bytes:
+        for reply in node.zenoh_session.get(key, payload=frame, timeout=5.0):
+            if reply.ok is not None:
+                return bytes(reply.ok.payload.to_bytes())
+        return b""
+
+    return await asyncio.to_thread(get)
