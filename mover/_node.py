@@ -21,7 +21,7 @@ from typing import Any, Literal
 import zenoh
 
 from . import _keys
-from ._bridge import Portal, run_blocking
+from ._bridge import Portal, run_blocking, sample_size
 from ._config import NodeConfig, Team
 from ._exceptions import MoverError, PayloadTooLarge, WireError
 from ._membership import Membership
@@ -126,9 +126,13 @@ class Node:
         self.team.on_gone(self._server.cancel)  # a caller gone for good: stop its calls
         self._declared += [
             session.declare_queryable(
-                _keys.rpc(team, self.name), portal.callback(self._server.on_query), complete=True
+                _keys.rpc(team, self.name),
+                portal.callback(self._server.on_query, size=sample_size),
+                complete=True,
             ),
-            session.declare_subscriber(_keys.ctl(team, self.name), portal.callback(self._on_ctl)),
+            session.declare_subscriber(
+                _keys.ctl(team, self.name), portal.callback(self._on_ctl, size=sample_size)
+            ),
             session.declare_queryable(
                 _keys.hello(team, self.name), portal.callback(self.team.on_hello_query)
             ),
@@ -312,7 +316,8 @@ class Node:
         if entry is None:
             assert self._portal is not None
             zsub = self._session.declare_subscriber(
-                _keys.broadcast(self.team_config.name, topic), self._portal.callback(self._on_bc)
+                _keys.broadcast(self.team_config.name, topic),
+                self._portal.callback(self._on_bc, droppable=True, size=sample_size),
             )
             entry = (zsub, [])
             self._subs[topic] = entry

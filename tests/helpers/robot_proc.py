@@ -11,6 +11,7 @@ import asyncio
 import logging
 import os
 import sys
+import time
 from pathlib import Path
 from typing import Any
 
@@ -69,15 +70,32 @@ async def main(args: argparse.Namespace) -> None:
         def echo(data: bytes) -> int:
             return len(data)
 
-        for fn in (add, boom, sleep, hold, bump, bumps, send, call_other, echo):
+        def block(seconds: float) -> None:
+            time.sleep(seconds)  # holds the loop up, as a busy or stuck program would
+
+        def rss_kb() -> int:
+            status = Path("/proc/self/status").read_text()
+            return int(next(x for x in status.splitlines() if x.startswith("VmRSS")).split()[1])
+
+        def flooded() -> int:
+            return counts["flood"]
+
+        for fn in (add, boom, sleep, hold, bump, bumps, send, call_other, echo, block, rss_kb):
             node.export(fn)
+        node.export(flooded)
         node.export(heard_on, "heard")
 
         async def listen(topic: str) -> None:
             async for m in node.subscribe(topic):
                 heard[topic].append([m.sender, m.data, m.distance, m.bearing])
 
+        async def count(topic: str) -> None:  # a busy topic: counted, not kept
+            async for _ in node.subscribe(topic, maxlen=1000):
+                counts[topic] += 1
+
+        counts = {"flood": 0}
         listeners = [asyncio.create_task(listen(t)) for t in TOPICS]
+        listeners.append(asyncio.create_task(count("flood")))
         await node.team.wait_for({node.name}, timeout=10)
         print("READY", os.getpid(), flush=True)
         try:

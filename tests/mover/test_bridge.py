@@ -54,3 +54,21 @@ async def test_run_blocking_returns_and_raises() -> None:
 
     with pytest.raises(OSError, match="no"):
         await run_blocking(fail)
+
+
+async def test_the_hand_off_is_bounded_in_items_and_bytes() -> None:
+    portal = Portal(asyncio.get_running_loop(), limit=5, limit_bytes=1000)
+    got: list[int] = []
+    for i in range(20):  # the loop is held up: nothing drains meanwhile
+        portal.send(got.append, i, droppable=True)
+    assert portal.dropped == 15
+    for i in range(20):  # other items are kept up to twice the bound, then dropped too
+        portal.send(got.append, 100 + i)
+    assert portal.overflowed == 15
+    await asyncio.sleep(0)
+    assert got == [0, 1, 2, 3, 4, 100, 101, 102, 103, 104]
+    for i in range(5):  # a few large items: the byte bound
+        portal.send(got.append, 200 + i, droppable=True, size=400)
+    assert portal.dropped == 15 + 2
+    await asyncio.sleep(0)
+    assert got[-3:] == [200, 201, 202]
