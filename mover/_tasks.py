@@ -127,10 +127,21 @@ class Collectives:
             state.lost = [m for m in members if m < self.node.name and m not in self.node.team]
             state.takeover = bool(state.lost)
             while len(self._steps) > _STEP_MEMORY:
-                oldest = next(iter(self._steps))
-                if not self._steps[oldest].decision.done():
-                    break
-                del self._steps[oldest]
+                # The oldest goes, decided or not: a member that opens steps that are never
+                # decided (a bug, or a member gone rogue) cannot make this one hold them all.
+                old_key, old = next(iter(self._steps.items()))
+                del self._steps[old_key]
+                if not old.decision.done():
+                    log.warning(
+                        "%s: step %s of run %r never decided: dropped",
+                        self.node.name,
+                        old_key[1],
+                        old_key[0],
+                    )
+                    old.decision.set_exception(
+                        MemberLost(f"step {old_key[1]} of run {old_key[0]!r} was never decided")
+                    )
+                    old.decision.exception()  # retrieved: it may have no waiter left
         return state
 
     def heard(self, run: str, step: int) -> asyncio.Future[list[Any]]:
@@ -163,6 +174,8 @@ class Collectives:
         if state.told:
             return
         state.told = True
+        if state.decision.exception() is not None:
+            return  # dropped undecided (see step): its waiters were told
         decision = state.decision.result()
         local = self.heard(run, step)
         if not local.done():

@@ -192,3 +192,31 @@ async def test_a_malformed_decision_leaves_every_listener_alive(nodes: list[Node
     outcomes = await asyncio.wait_for(asyncio.gather(*(t.distributed_or(op) for t in ts)), 10)
     assert len({o.winner for o in outcomes}) == 1
     assert all(not t.collectives._listener.done() for t in ts)
+
+
+async def test_steps_that_are_never_decided_stay_bounded(nodes: list[Node]) -> None:
+    """A member that opens 2,000 OR steps and never decides one: the designated member keeps
+    at most its step memory of them (their waiters are told), not 2,000 tasks."""
+    from mover import RemoteError
+    from mover._tasks import _STEP_MEMORY, Collectives
+
+    designated, rogue = nodes[0], nodes[1]
+    collectives = Collectives(designated)
+    members = [designated.name, rogue.name]
+    calls = [
+        asyncio.ensure_future(
+            rogue.call(designated.name, "mover.or_join", "r", k, rogue.name, members, timeout=20)
+        )
+        for k in range(2000)
+    ]
+    async with asyncio.timeout(20):
+        while designated.stats["recv.call"] < 2000:
+            await asyncio.sleep(0.05)
+    await asyncio.sleep(0.2)
+    assert len(collectives._steps) <= _STEP_MEMORY
+    assert len(designated._server.tasks) <= _STEP_MEMORY + 10
+    dropped = await asyncio.gather(*calls[: 2000 - _STEP_MEMORY], return_exceptions=True)
+    assert all(isinstance(e, RemoteError) and "never decided" in str(e) for e in dropped)
+    for call in calls:
+        call.cancel()
+    await asyncio.gather(*calls, return_exceptions=True)
