@@ -15,7 +15,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from mover import FixedLocator, Node, NodeConfig, Team
+from mover import Collectives, FixedLocator, Node, NodeConfig, Team
 
 TOPICS = ("news", "chatter", "probe")
 
@@ -96,6 +96,13 @@ async def main(args: argparse.Namespace) -> None:
         counts = {"flood": 0}
         listeners = [asyncio.create_task(listen(t)) for t in TOPICS]
         listeners.append(asyncio.create_task(count("flood")))
+        collectives = Collectives(node)  # its listener of OR decisions, for the fuzz tests
+
+        def listening() -> bool:
+            """Whether every listener of this process is still alive."""
+            return not collectives._listener.done() and not any(t.done() for t in listeners)
+
+        node.export(listening)
         await node.team.wait_for({node.name}, timeout=10)
         print("READY", os.getpid(), flush=True)
         try:
