@@ -2,10 +2,13 @@
 
     python bench/rpc.py [--rounds N] [--flood-seconds S] [--receivers 10]
 
-(a) raw zenoh get -> queryable (zenoh's default callback, reply in the callback) and
-(b) a mover call (signed envelopes, argument check, procedure run on the callee's asyncio loop),
-between the same two processes over the same zenoh link, at 64 B and 64 KiB, interleaved in
-rounds so that machine noise hits both alike. Then delivered messages per second of
+(a) raw zenoh get -> queryable (zenoh's default callback, reply in the callback),
+(a') the fair baseline for any asyncio framework: raw zenoh with the smallest asyncio hand-off
+on both sides (the queryable hands the query to the server's loop, which replies; the caller
+awaits a future that the reply callback resolves on its loop), and
+(b) a mover call (sealed envelopes, argument check, procedure run on the callee's asyncio loop),
+between the same two processes over the same zenoh link, at 64 B, 64 KiB and 1 MiB, interleaved
+in rounds so that machine noise hits all alike. Then delivered messages per second of
 (c) raw zenoh put -> subscriber handed into asyncio (coalesced wake-ups) and
 (d) mover range-limited broadcast (every receiver within range, so each verifies, filters and
 delivers), one sender to ``--receivers`` receiver processes, reliable (congestion control BLOCK)
@@ -32,6 +35,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from mover import FixedLocator, Node, NodeConfig, Team, free_port
 
 RAW_KEY = "bench/raw/echo"
+LOOP_KEY = "bench/raw/loop"
 FLOOD_KEY = "bench/raw/flood"
 
 
@@ -47,6 +51,16 @@ async def serve() -> None:
                 query.reply(RAW_KEY, query.payload, express=True)
 
         queryable = node.zenoh_session.declare_queryable(RAW_KEY, raw)
+        loop = asyncio.get_running_loop()
+
+        def reply_on_loop(query: Any) -> None:
+            with query:
+                query.reply(LOOP_KEY, query.payload, express=True)
+
+        def handed(query: Any) -> None:  # one hop into the loop, the reply from there
+            loop.call_soon_threadsafe(reply_on_loop, query)
+
+        looped = node.zenoh_session.declare_queryable(LOOP_KEY, handed)
 
         def echo(data: bytes) -> bytes:
             return data
@@ -55,6 +69,28 @@ async def serve() -> None:
         print("READY", flush=True)
         await asyncio.get_running_loop().run_in_executor(None, sys.stdin.read)
         queryable.undeclare()
+        looped.undeclare()
+
+
+async def _loop_get(session: Any, payload: bytes) -> bytes:
+    """A raw get whose reply is handed into this loop, awaited as a future."""
+    loop = asyncio.get_running_loop()
+    future: asyncio.Future[bytes] = loop.create_future()
+
+    def on_reply(reply: Any) -> None:
+        if reply.ok is not None:
+            data = reply.ok.payload.to_bytes()
+            loop.call_soon_threadsafe(lambda: future.done() or future.set_result(data))
+
+    session.get(
+        LOOP_KEY,
+        on_reply,
+        payload=payload,
+        express=True,
+        consolidation=zenoh.ConsolidationMode.NONE,
+        timeout=10.0,
+    )
+    return await asyncio.wait_for(future, 10)
 
 
 async def receive(name: str, mode: str) -> None:
@@ -149,9 +185,10 @@ def pct(samples: list[float], q: float) -> float:
 async def measure_rpc(node: Node, rounds: int) -> dict[str, Any]:
     session = node.zenoh_session
     out: dict[str, Any] = {}
-    for label, size, per_round in (("64B", 64, 200), ("64KiB", 65536, 40)):
+    for label, size, per_round in (("64B", 64, 200), ("64KiB", 65536, 40), ("1MiB", 1 << 20, 5)):
         payload = os.urandom(size)
         raw: list[float] = []
+        looped: list[float] = []
         mover: list[float] = []
         for _ in range(3):  # warm-up
             session.get(
@@ -171,12 +208,17 @@ async def measure_rpc(node: Node, rounds: int) -> dict[str, Any]:
                 assert reply.ok is not None and len(reply.ok.payload.to_bytes()) == size
             for _ in range(per_round):
                 t = time.perf_counter()
+                assert len(await _loop_get(session, payload)) == size
+                looped.append(time.perf_counter() - t)
+            for _ in range(per_round):
+                t = time.perf_counter()
                 echoed = await node.call("server", "echo", payload, timeout=10)
                 mover.append(time.perf_counter() - t)
                 assert len(echoed) == size
         out[label] = {
             "raw_p50": pct(raw, 50),
             "raw_p99": pct(raw, 99),
+            "asyncio_p50": pct(looped, 50),
             "mover_p50": pct(mover, 50),
             "mover_p99": pct(mover, 99),
             "n": len(raw),
@@ -252,7 +294,8 @@ async def coordinate(args: argparse.Namespace) -> None:
             f"RPC {label:>5}: raw get->queryable p50 {r['raw_p50']:.3f} ms p99 "
             f"{r['raw_p99']:.3f} ms | mover call p50 {r['mover_p50']:.3f} ms p99 "
             f"{r['mover_p99']:.3f} ms | ratio p50 {r['mover_p50'] / r['raw_p50']:.2f} "
-            f"(n={r['n']} each)"
+            f"(n={r['n']} each) | raw+asyncio hand-offs p50 {r['asyncio_p50']:.3f} ms, "
+            f"ratio {r['mover_p50'] / r['asyncio_p50']:.2f}"
         )
     for mode, f in flood.items():
         print(
@@ -268,6 +311,13 @@ async def coordinate(args: argparse.Namespace) -> None:
         "rpc_p50_ms_mover_64KiB": round(rpc["64KiB"]["mover_p50"], 4),
         "rpc_ratio_64B": round(rpc["64B"]["mover_p50"] / rpc["64B"]["raw_p50"], 3),
         "rpc_ratio_64KiB": round(rpc["64KiB"]["mover_p50"] / rpc["64KiB"]["raw_p50"], 3),
+        "rpc_p50_ms_asyncio": round(rpc["64B"]["asyncio_p50"], 4),
+        "rpc_p50_ms_asyncio_1MiB": round(rpc["1MiB"]["asyncio_p50"], 4),
+        "rpc_p50_ms_mover_1MiB": round(rpc["1MiB"]["mover_p50"], 4),
+        "rpc_ratio_vs_asyncio_64B": round(rpc["64B"]["mover_p50"] / rpc["64B"]["asyncio_p50"], 3),
+        "rpc_ratio_vs_asyncio_1MiB": round(
+            rpc["1MiB"]["mover_p50"] / rpc["1MiB"]["asyncio_p50"], 3
+        ),
         "broadcast_msgs_per_s_raw": round(flood["raw"]["msgs_per_s"]),
         "broadcast_msgs_per_s_mover": round(flood["mover"]["msgs_per_s"]),
         "broadcast_ratio": round(flood["mover"]["msgs_per_s"] / flood["raw"]["msgs_per_s"], 3),
