@@ -30,7 +30,7 @@ MIN_KEY_BYTES = 16
 
 @dataclass(frozen=True)
 class Team:
-    """A team: its name and its secret key (every envelope is signed with it)."""
+    """A team: its name and its secret key (every envelope is sealed under keys derived from it)."""
 
     name: str
     key: bytes = field(repr=False)

@@ -2,7 +2,8 @@
 
 Every node holds a liveliness token ``mover/<team>/alive/<name>``. A token alone proves nothing
 (anyone on the network can declare one), so when a token appears the node asks its holder for a
-hello signed with the team key and carrying a fresh challenge; only then is it a member. A token
+hello sealed under the team key and carrying a fresh challenge; only then is it a member, and
+the hello tells the asker the member's session (see ``_wire.Sessions``). A token
 that goes away (the process exited, was SIGKILLed — seen within milliseconds — or hung past its
 one-second lease) makes the member leave.
 """

@@ -253,7 +253,7 @@ class Node:
         the network is congested (default: drop, as a radio would). ``express=True`` sends the
         frame at once rather than letting zenoh batch it with others for up to a millisecond or
         so (for messages on a latency-bound path, such as a lock-step tick). Broadcasts made in one
-        turn of the event loop leave together, at the end of that turn, as one signed frame per
+        turn of the event loop leave together, at the end of that turn, as one sealed frame per
         topic (so a burst costs one signature and one zenoh message); each keeps the position
         this node had when it was made. Raises PayloadTooLarge at once for oversized data.
         """

@@ -1,9 +1,9 @@
 """Remote procedure calls: what a node exports, how it serves calls, how it makes them.
 
-A call is a zenoh ``get`` on ``mover/<team>/rpc/<robot>`` carrying a signed ``call`` envelope
-``[procedure, args, kwargs]``; the callee answers with one signed ``reply`` envelope, either
+A call is a zenoh ``get`` on ``mover/<team>/rpc/<robot>`` carrying a sealed ``call`` envelope
+``[procedure, args, kwargs]``; the callee answers with one sealed ``reply`` envelope, either
 ``{"ok": result}`` or ``{"err": {"type", "message"}}``, then drops the query. Cancelling the
-caller's await sends a signed ``cancel`` to the callee, which cancels the procedure's task (its
+caller's await sends a sealed ``cancel`` to the callee, which cancels the procedure's task (its
 ``finally`` runs). A call to a member that leaves the team mid-call fails with RobotLost; a
 caller that leaves has its calls cancelled on the callee.
 """

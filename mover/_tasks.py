@@ -18,7 +18,7 @@ announcement), 2n for a long one (n-1 questions and answers, the claim and its a
 AND, designated variant (section 4.4): each member sends its result to the designated member and
 gets everybody's results in the reply, once all have finished: 2(n-1) messages.
 AND, all-to-all: each member sends its result to every other member: 2n(n-1) messages.
-(A message is one signed envelope; a call is a request and its reply.)
+(A message is one sealed envelope; a call is a request and its reply.)
 
 Failures. A member that leaves the team during a step (its process died or hung past its lease)
 makes the step fail with :class:`MemberLost` within about a second, or, with
