@@ -4,12 +4,13 @@ A team frame is ``b"M2" + u16 header length (big-endian) + header + ciphertext``
 
 * ``header`` is the msgpack array ``[version, team, sender, recipient, to_epoch, kind,
   call_id, timestamp, nonce]``, sent in the clear and authenticated;
-* ``ciphertext`` is the msgpack payload sealed with ChaCha20-Poly1305 (16-byte tag), the header
+* ``ciphertext`` is the msgpack payload sealed with AES-256-GCM (16-byte tag), the header
   as associated data, under a key derived for the sender's session:
   ``HKDF-SHA256(team key, salt=epoch, info=b"mover/2/" + sender)``;
 * ``nonce`` is 16 bytes: the sender's random 8-byte ``epoch`` (new each time a node opens) and a
   big-endian 8-byte counter; the AEAD nonce is four zero bytes and the counter, unique under a
-  session's key.
+  session's key. (AES-GCM rather than ChaCha20-Poly1305: with AES-NI it seals a MiB 3-5x
+  faster on these machines, 0.12 against 0.59 ms.)
 
 ``recipient`` and ``to_epoch`` bind a call, a reply or a cancel to the one member it is for and
 to that member's session (both empty for broadcasts and hellos, whose topic or challenge is in
@@ -43,7 +44,7 @@ import msgpack
 import numpy as np
 from cryptography.exceptions import InvalidTag
 from cryptography.hazmat.primitives import hashes
-from cryptography.hazmat.primitives.ciphers.aead import ChaCha20Poly1305
+from cryptography.hazmat.primitives.ciphers.aead import AESGCM
 from cryptography.hazmat.primitives.kdf.hkdf import HKDF
 
 from ._exceptions import PayloadTooLarge, WireError
@@ -156,11 +157,11 @@ class SessionUnknown(EnvelopeRefused):
     """A broadcast from a session this node has not verified yet (see :class:`Sessions`)."""
 
 
-def session_key(team_key: bytes, sender: str, epoch: bytes) -> ChaCha20Poly1305:
+def session_key(team_key: bytes, sender: str, epoch: bytes) -> AESGCM:
     """The AEAD of one sender's session (see the module docstring)."""
     info = b"mover/2/" + sender.encode()
     hkdf = HKDF(algorithm=hashes.SHA256(), length=32, salt=epoch, info=info)
-    return ChaCha20Poly1305(hkdf.derive(team_key))
+    return AESGCM(hkdf.derive(team_key))
 
 
 class Sealer:
@@ -176,14 +177,14 @@ class Sealer:
 
     def seal(
         self, kind: str, payload: Any, call_id: int = 0, *, to: str = "", to_epoch: bytes = b""
-    ) -> bytes:
+    ) -> bytearray:
         """Return the sealed frame of a new envelope for ``to`` in its session ``to_epoch``
         (empty: the team, or whoever asked); raise PayloadTooLarge over the limit."""
         return self.seal_packed(kind, pack(payload), call_id, to=to, to_epoch=to_epoch)
 
     def seal_packed(
         self, kind: str, payload: bytes, call_id: int = 0, *, to: str = "", to_epoch: bytes = b""
-    ) -> bytes:
+    ) -> bytearray:
         """Like :meth:`seal` for a payload already encoded with :func:`pack`."""
         self._counter += 1
         counter = self._counter.to_bytes(8, "big")
@@ -196,8 +197,14 @@ class Sealer:
             raise PayloadTooLarge(
                 f"{kind} envelope of {size} bytes is over the limit of {self.max_size}"
             )
-        sealed = self._aead.encrypt(b"\0\0\0\0" + counter, payload, header)
-        return SIGNED + len(header).to_bytes(2, "big") + header + sealed
+        # one buffer, sealed in place: a large payload is copied once, by the cipher
+        prefix = SIGNED + len(header).to_bytes(2, "big") + header
+        frame = bytearray(len(prefix) + len(payload) + TAG_SIZE)
+        frame[: len(prefix)] = prefix
+        self._aead.encrypt_into(
+            b"\0\0\0\0" + counter, payload, header, memoryview(frame)[len(prefix) :]
+        )
+        return frame
 
 
 class Sessions:
@@ -285,7 +292,7 @@ class Opener:
         self.team = team
         self._key = key
         self.max_size = max_size
-        self._keys: dict[tuple[str, bytes], ChaCha20Poly1305] = {}
+        self._keys: dict[tuple[str, bytes], AESGCM] = {}
 
     def open(self, frame: bytes) -> Envelope:
         """Return the envelope in a sealed frame (authentic, not yet judged fresh: see
@@ -295,7 +302,7 @@ class Opener:
         if frame[:2] != SIGNED or len(frame) < 4 + TAG_SIZE:
             raise WireError("not a sealed mover frame")
         n = int.from_bytes(frame[2:4], "big")
-        header, sealed = frame[4 : 4 + n], frame[4 + n :]
+        header, sealed = frame[4 : 4 + n], memoryview(frame)[4 + n :]  # no copy of the body
         fields = unpack(header, max_size=self.max_size)
         if not isinstance(fields, list) or len(fields) != 9:
             raise WireError("envelope header is not a 9-field array")
@@ -333,7 +340,7 @@ class Opener:
             to_epoch=to_epoch,
         )
 
-    def _aead(self, sender: str, epoch: bytes) -> ChaCha20Poly1305:
+    def _aead(self, sender: str, epoch: bytes) -> AESGCM:
         aead = self._keys.pop((sender, epoch), None)  # re-inserted last: LRU order
         if aead is None:
             aead = session_key(self._key, sender, epoch)
