@@ -155,9 +155,24 @@ class Signature:
                 self.variadic[name] = param.kind
             if check is not None:
                 self.checks[name] = check
+        # Prepared once: the common call (positional arguments only, to a procedure without
+        # *args, **kwargs or keyword-only parameters) is checked without inspect's binding.
+        params = list(self.signature.parameters.values())
+        self._plain = all(p.kind is p.POSITIONAL_OR_KEYWORD for p in params)
+        self._positional = [(p.name, self.checks.get(p.name)) for p in params]
+        self._required = sum(1 for p in params if p.default is p.empty)
 
     def bind(self, args: list[Any], kwargs: dict[str, Any]) -> tuple[list[Any], dict[str, Any]]:
         """Checked (and converted) arguments; raise TypeError saying what is wrong."""
+        if self._plain and not kwargs and self._required <= len(args) <= len(self._positional):
+            out = list(args)
+            for i, (name, check) in enumerate(self._positional[: len(args)]):
+                if check is not None:
+                    try:
+                        out[i] = check(args[i])
+                    except TypeError as exc:
+                        raise TypeError(f"argument {name!r}: {exc}") from None
+            return out, {}
         bound = self.signature.bind(*args, **kwargs)
         for name, value in bound.arguments.items():
             check = self.checks.get(name)

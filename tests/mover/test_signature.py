@@ -62,3 +62,22 @@ def test_variadic() -> None:
     assert sig.bind([1, 2], {"a": 1}) == ([1, 2], {"a": 1.0})
     with pytest.raises(TypeError, match="argument 'xs'"):
         sig.bind([1, "2"], {})
+
+
+def test_the_prepared_path_checks_as_the_full_binding_does() -> None:
+    def add(x: int, y: float = 1.0) -> float:
+        return x + y
+
+    sig = Signature(add)
+    assert sig.bind([1, 2], {}) == ([1, 2.0], {})  # positional only: the prepared path
+    assert sig.bind([1], {"y": 2}) == ([1, 2.0], {})  # with keywords: inspect's binding
+    for args in (["1", 2], ["1"]):
+        with pytest.raises(TypeError, match="argument 'x': expected int") as fast:
+            sig.bind(args, {})
+        with pytest.raises(TypeError) as slow:
+            sig.bind([], {"x": args[0]})
+        assert str(fast.value) == str(slow.value)
+    with pytest.raises(TypeError, match="missing a required argument"):
+        sig.bind([], {})
+    with pytest.raises(TypeError, match="too many positional"):
+        sig.bind([1, 2, 3], {})
