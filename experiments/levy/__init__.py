@@ -16,7 +16,7 @@ index, the same arenas for every method. Per-point runs are saved as JSON lines 
 
 from ._cli import register, run, settings
 from ._paper import ALPHAS, FIG8_TARGETS, FIG9_ROBOTS, ORDER, Setup
-from ._report import saturation, table, theory
+from ._report import paired, saturation, table, theory
 from ._settings import LevySettings, Point
 from ._sweep import SWEEPS, points, run_points
 from ._trial import arena, heard, run_trial, run_world, world_data
@@ -32,6 +32,7 @@ __all__ = [
     "Setup",
     "arena",
     "heard",
+    "paired",
     "points",
     "register",
     "run",

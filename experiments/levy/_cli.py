@@ -10,11 +10,11 @@ from dataclasses import replace
 from pathlib import Path
 
 from mover.cli import UsageError
-from robots.library import METHODS
+from robots.library import METHODS, LevyParams
 
 from .._common import comma_list, runner_parser
 from ._paper import ALPHA_TARGETS, ALPHAS, FIG8_TARGETS, FIG9_ROBOTS, Setup
-from ._report import saturation, speed, table, theory
+from ._report import paired, saturation, speed, table, theory
 from ._settings import LevySettings
 from ._sweep import SWEEPS, points, run_points
 
@@ -66,6 +66,17 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     )
     parser.add_argument("--alpha", type=float, default=Setup.alpha, help="the walks' α (1)")
     parser.add_argument("--max-time", type=float, default=Setup.max_time, help="censor (s)")
+    walk = LevyParams()
+    for flag, default, what in (
+        ("--scale", Setup.scale, "metres per unit Lévy step"),
+        ("--cap", Setup.cap, "the longest Lévy step (m)"),
+        ("--fixed", Setup.fixed, "the fixed-length walk's step (m)"),
+        ("--rho0", walk.rho0, "ρ0 of eq. 9: robots repel within it (m)"),
+        ("--k-rep", walk.k_rep, "k_rep of eq. 9 among robots"),
+        ("--signature-range", walk.signature_range, "a found target's signature reach (m)"),
+        ("--k-sig", walk.k_sig, "k_rep of a signature"),
+    ):
+        parser.add_argument(flag, type=float, default=default, help=f"{what} ({default:g})")
     parser.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
     parser.add_argument(
         "--save",
@@ -92,8 +103,31 @@ def settings(args: argparse.Namespace) -> LevySettings:
         raise UsageError("--targets and --robots must be positive")
     if not all(0 < a <= 2 for a in [*args.alphas, args.alpha]):
         raise UsageError("--alpha and --alphas must be in (0, 2]")
-    if args.max_time <= 0:
-        raise UsageError("--max-time must be positive")
+    numbers = (args.max_time, args.scale, args.cap, args.fixed, args.rho0, args.signature_range)
+    if min(numbers) <= 0 or min(args.k_rep, args.k_sig) < 0:
+        raise UsageError(
+            "--max-time, --scale, --cap, --fixed, --rho0 and --signature-range must be"
+            " positive, --k-rep and --k-sig not negative"
+        )
+    walk = replace(
+        LevyParams(),
+        rho0=args.rho0,
+        k_rep=args.k_rep,
+        signature_range=args.signature_range,
+        k_sig=args.k_sig,
+    )
+    setup = replace(
+        Setup(),
+        alpha=args.alpha,
+        max_time=args.max_time,
+        scale=args.scale,
+        cap=args.cap,
+        fixed=args.fixed,
+        walk=walk,
+    )
+    save = None if args.no_save else args.save
+    if save is not None and setup.tag():  # runs of other settings are kept apart
+        save = save.with_name(f"{save.name}-{setup.tag()}")
     return LevySettings(
         seed=secrets.randbits(32) if args.seed is None else args.seed,
         runs=args.runs,
@@ -103,8 +137,8 @@ def settings(args: argparse.Namespace) -> LevySettings:
         robots=tuple(args.robots),
         alphas=tuple(args.alphas),
         workers=args.workers,
-        setup=replace(Setup(), alpha=args.alpha, max_time=args.max_time),
-        save=None if args.no_save else args.save,
+        setup=setup,
+        save=save,
         out=None if args.no_plots else args.out,
         json=args.json,
         progress=not args.quiet,
@@ -117,12 +151,15 @@ def run(args: argparse.Namespace) -> int:
     print(f"seed: {s.seed}")
     print(f"sweeps: {','.join(s.sweeps)}  methods: {','.join(s.methods)}  runs: {s.runs}")
     print(f"setup: {s.setup}")
+    if s.save is not None:
+        print(f"runs saved in: {s.save}")
     everything = []
     for sweep in s.sweeps:
         t0 = time.monotonic()
         records, fresh, wall = run_points(s, points(s, sweep), sweep)
         everything.extend(records)
         print(table(records, _KEYS[sweep], _TITLES[sweep], s.setup))
+        print(paired(records, _KEYS[sweep], s.setup))
         if sweep == "fig9":
             print(saturation(records, s.setup))
         if sweep == "alpha":

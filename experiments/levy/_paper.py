@@ -10,7 +10,9 @@ obstacle count, the turn phase, nor the numbers behind Fig. 8-9 (only their orde
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+
+from robots.library import LevyParams
 
 #: Fig. 8: search time against the number of targets, 10 robots.
 FIG8_TARGETS = (1, 2, 4, 8, 12, 16)
@@ -35,14 +37,9 @@ class Setup:
     obstacles: int = 12
     obstacle_min: float = 0.5
     obstacle_max: float = 2.5
-    speed: float = 0.6
-    """v of eq. 10 (m/s), V-A."""
-    sense_range: float = 1.0
-    """r_v: a target is detected this near (m)."""
-    signature_range: float = 3.0
-    """A marked target's signature reaches this far (m), "wider than the sensing range"."""
-    rho0: float = 1.5
-    """ρ0 of eq. 8-9: robots repel within it (m)."""
+    walk: LevyParams = field(default_factory=LevyParams)
+    """The controller: v = 0.6 m/s (V-A), r_v = 1 m, signatures to 3 m, ρ0 = 1.5 m, …
+    (``field`` and ``signatures`` are set by the method)."""
     alpha: float = 1.0
     """Mantegna's stable index of the Lévy steps (1: Viswanathan's μ = 2)."""
     scale: float = 1.0
@@ -53,3 +50,19 @@ class Setup:
     """The fixed-length walk's step (m): the Lévy steps' median at α = 1 (scale × 1)."""
     max_time: float = 6000.0
     """A trial that has not found every target by then stops, censored (s)."""
+
+    def tag(self) -> str:
+        """The settings that differ from the defaults, except ``alpha`` and ``max_time``
+        (which the saved runs record), as ``name=value`` joined by commas ("" if none)."""
+        base = Setup()
+        diff = [
+            f"{k}={getattr(self, k):g}"
+            for k in ("size", "obstacles", "obstacle_min", "obstacle_max", "scale", "cap", "fixed")
+            if getattr(self, k) != getattr(base, k)
+        ]
+        diff += [
+            f"{k}={getattr(self.walk, k):g}"
+            for k in LevyParams.__dataclass_fields__
+            if getattr(self.walk, k) != getattr(base.walk, k)
+        ]
+        return ",".join(diff)

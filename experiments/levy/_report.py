@@ -89,11 +89,11 @@ def theory(setup: Setup, targets: int) -> str:
     """What the theory predicts for the α sweep: Viswanathan's estimate (eq. 4-5) for
     non-destructive search, and that destructive search's optimum is ballistic."""
     density = targets / setup.size**2
-    lam = 1.0 / (2.0 * setup.sense_range * density)  # mean free path between targets
-    mu = viswanathan_mu(lam, setup.sense_range)
+    lam = 1.0 / (2.0 * setup.walk.sense_range * density)  # mean free path between targets
+    mu = viswanathan_mu(lam, setup.walk.sense_range)
     return (
         f"theory: λ = 1/(2 r_v ρ) = {lam:.1f} m for {targets} targets (r_v = "
-        f"{setup.sense_range:g} m); non-destructive optimum (eq. 4-5) μ = {mu:.2f}, "
+        f"{setup.walk.sense_range:g} m); non-destructive optimum (eq. 4-5) μ = {mu:.2f}, "
         f"stable α = {stable_alpha(mu):.2f}; destructive search (a found target does not count "
         "again, as here): the optimum moves to μ → 1, α → 0, ballistic motion (Viswanathan et "
         "al. 1999; Santos et al. 2004)"
@@ -107,3 +107,27 @@ def speed(records: Records, wall: float) -> str:
     per_core = fresh / cpu if cpu else math.nan
     overall = f", {fresh / wall:.0f} robot-s per wall s over the pool" if wall else ""
     return f"speed: {per_core:.0f} simulated robot-seconds per wall second a worker{overall}"
+
+
+def paired(records: Records, key: str, setup: Setup) -> str:
+    """The methods' differences paired by run (the same arena, targets and starts): mean ±
+    se of L+P - L and L - FL at each ``key``, and how many runs each pair shares."""
+    by: dict[tuple[Any, str, int], float] = {}
+    for r, t in zip(records, times(records, setup.max_time), strict=True):
+        by[(r[key], r["method"], r["run"])] = t
+    xs = sorted({r[key] for r in records})
+    pairs = [(a, b) for a, b in (("L+P", "L"), ("L", "FL")) if any(k[1] == a for k in by)]
+    pairs = [(a, b) for a, b in pairs if any(k[1] == b for k in by)]
+    if not pairs:
+        return ""
+    out = [f"\npaired by run (same arena and starts): mean ± se of the difference (s) by {key}"]
+    out.append(f"{key:>7} " + "".join(f"{a + ' - ' + b:>22}" for a, b in pairs))
+    for x in xs:
+        cells = []
+        for a, b in pairs:
+            runs = [k for (xx, m, k) in by if xx == x and m == a and (x, b, k) in by]
+            d = [by[(x, a, k)] - by[(x, b, k)] for k in runs]
+            s = summary(d)
+            cells.append(f"{s.mean:+10.1f} ±{s.se:5.1f} (n {s.n:>3})" if d else f"{'-':>22}")
+        out.append(f"{x:>7g} " + "".join(cells))
+    return "\n".join(out)

@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 
 from robots.hal import Sighting
-from robots.library import MARK, LevyParams, Neighbour, levy_sense, walker
+from robots.library import MARK, Neighbour, levy_sense, walker
 from sim_hw.continuous import (
     TICK,
     CameraSpec,
@@ -69,7 +69,7 @@ def arena(setup: Setup, robots: int, targets: int, master: int, run: int) -> Wor
         clearance=1.0,
     )
     spots = free_points(spec, targets, np.random.default_rng(ss["targets"]), apart=2.0)
-    hears = setup.sense_range + 0.15  # the robot brakes from 0.6 m/s in the tick it marks
+    hears = setup.walk.sense_range + 0.15  # the robot brakes from 0.6 m/s in the tick it marks
     markers = tuple(MarkerSpec("target", f"t{i}", p, 0.2, "", hears) for i, p in enumerate(spots))
     spec = replace(spec, name=f"levy-{run}", markers=markers, robot=robot_spec(setup))
     rng = np.random.default_rng(ss["starts"])
@@ -86,20 +86,10 @@ def robot_spec(setup: Setup) -> RobotSpec:
     all-round camera out to the signature range (targets transmit to every side)."""
     return RobotSpec(
         radius=0.15,
-        max_speed=setup.speed,
+        max_speed=setup.walk.speed,
         max_turn=2.0,
         sonar=SonarSpec(rays=8, max_range=1.0),
-        camera=CameraSpec(max_range=setup.signature_range, fov=2 * math.pi),
-    )
-
-
-def params(setup: Setup) -> LevyParams:
-    """The controller's settings for ``setup``."""
-    return LevyParams(
-        speed=setup.speed,
-        sense_range=setup.sense_range,
-        signature_range=setup.signature_range,
-        rho0=setup.rho0,
+        camera=CameraSpec(max_range=setup.walk.signature_range, fov=2 * math.pi),
     )
 
 
@@ -129,7 +119,6 @@ def run_world(
     ids = sorted(spec.robots)
     for rid in ids:
         world.add_robot(rid)
-    cfg = params(setup)
     walks = [
         walker(
             method,
@@ -138,7 +127,7 @@ def run_world(
             scale=setup.scale,
             cap=setup.cap,
             fixed=setup.fixed,
-            params=cfg,
+            params=setup.walk,
         )
         for i in range(len(ids))
     ]
@@ -153,7 +142,7 @@ def run_world(
         for i, (rid, r) in enumerate(zip(ids, readings, strict=True)):
             seen = [Sighting(*c) for c in r["cam"] or ()]
             bump = r["bump"] is not None
-            near = heard(locs, i, setup.rho0)
+            near = heard(locs, i, setup.walk.rho0)
             cmd = walks[i].step(levy_sense(TICK, r["sonar"] or (), angles, bump, seen, near))
             led = "" if cmd.mark is None else MARK + cmd.mark
             world.set_command(rid, {"v": cmd.v, "w": cmd.w, "led": led})

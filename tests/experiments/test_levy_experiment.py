@@ -14,9 +14,11 @@ import pytest
 from experiments.levy import (
     Setup,
     arena,
+    paired,
     register,
     run_trial,
     run_world,
+    settings,
     table,
     theory,
     world_data,
@@ -47,7 +49,7 @@ def test_a_trial_is_a_function_of_its_seeds() -> None:
 def test_the_arena_keeps_targets_and_robots_clear_and_is_shared_by_methods() -> None:
     spec = arena(Setup(), 10, 8, 3, 0)
     assert spec.size == (20.0, 20.0) and len(spec.obstacles) > 0
-    assert len(spec.markers) == 8 and all(m.hears > Setup().sense_range for m in spec.markers)
+    assert len(spec.markers) == 8 and all(m.hears > Setup().walk.sense_range for m in spec.markers)
     assert sorted(spec.robots) == [f"r{i:02d}" for i in range(10)]
     for m in spec.markers:
         for n in spec.markers:
@@ -84,6 +86,7 @@ def test_runner_tables_save_and_add_runs(
     assert "search time (s) vs number of targets, 10 robots (Fig. 8)" in out
     assert "L+P < L < FL" in out  # the paper's ordering, beside the measured one
     assert "robot-seconds per wall second" in out and "[####" in err
+    assert "paired by run" in out and "L+P - L" in out
     assert (tmp_path / "levy_fig8.png").stat().st_size > 0
     files = sorted(p.name for p in save.iterdir())
     assert files == ["L+P_r10_t1_a1.jsonl", "L_r10_t1_a1.jsonl"]
@@ -114,11 +117,13 @@ def test_censored_runs_are_marked_and_the_alpha_sweep_names_the_theory(
 
 def test_table_and_theory_by_hand() -> None:
     rec = [
-        {"method": m, "targets": 4, "time": t, "robots": 10, "alpha": 1.0}
-        for m, t in (("FL", 30.0), ("L", 20.0), ("L+P", 10.0), ("L+P", 14.0))
+        {"method": m, "targets": 4, "time": t, "robots": 10, "alpha": 1.0, "run": k}
+        for m, t, k in (("FL", 30.0, 0), ("L", 20.0, 0), ("L+P", 10.0, 0), ("L+P", 14.0, 1))
     ]
     text = table(rec, "targets", "t", Setup())
     assert "12.0 ±   2.8 (  2.0)" in text and text.count("L+P < L < FL") == 2
+    diffs = paired(rec, "targets", Setup())  # run 1 has no L to pair with
+    assert "-10.0 ±  nan (n   1)" in diffs and "-10.0" in diffs.splitlines()[-1]
     assert "μ = 1.90" in theory(Setup(), 8)
 
 
@@ -131,9 +136,20 @@ def test_table_and_theory_by_hand() -> None:
         ("--alphas", "0.5,2.5"),
         ("--alpha", "0"),
         ("--max-time", "-1"),
+        ("--rho0", "0"),
+        ("--k-rep", "-1"),
     ],
 )
 def test_usage_errors(argv: tuple[str, ...]) -> None:
     args = _parse(*argv, "--no-save")
     with pytest.raises(UsageError):
         args.func(args)
+
+
+def test_runs_of_other_settings_are_saved_apart(tmp_path: Path) -> None:
+    args = _parse("--save", str(tmp_path / "runs"), "--rho0", "3", "--k-sig", "20")
+    s = settings(args)
+    assert s.save == tmp_path / "runs-rho0=3,k_sig=20"
+    assert s.setup.walk.rho0 == 3.0 and s.setup.walk.k_sig == 20.0
+    plain = settings(_parse("--save", str(tmp_path / "runs"), "--alpha", "1.5"))
+    assert plain.save == tmp_path / "runs" and plain.setup.tag() == ""
