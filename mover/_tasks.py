@@ -49,6 +49,7 @@ log = logging.getLogger("mover.tasks")
 Policy = Literal["fail", "survivors"]
 _STEP_MEMORY = 512  # finished steps a designated member remembers (for late re-sends)
 DECIDED_TOPIC = "mover/decided"
+LOST_GRACE = 0.5  # seconds a member must stay gone (while this node is linked) to be lost
 CALL_TIMEOUT = 30.0  # seconds a collective's call waits before it is asked again
 POLL_AFTER = 0.2  # seconds an OR member waits for the announced decision before polling
 
@@ -115,7 +116,9 @@ class Collectives:
         node.export(self.or_claim, "mover.or_claim")
         node.export(self.and_done, "mover.and_done")
         node.export(self.and_put, "mover.and_put")
-        node.team.on_leave(self._member_left)
+        # Only a member gone for LOST_GRACE counts as lost: when a router restarts, every
+        # member sees the others leave a moment before it sees its own link go.
+        node.team.on_gone(self._member_left, grace=LOST_GRACE)
 
     def step(self, run: str, step: int, members: Sequence[str], kind: str = "and") -> _Step:
         key = (run, step)

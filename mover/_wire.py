@@ -232,6 +232,9 @@ class Sessions:
 
     def learn(self, sender: str, epoch: bytes, counter: int) -> None:
         """``sender``'s current session, verified by a fresh challenge at ``counter``."""
+        known = self._verified.get(sender)
+        if known is not None and known[0] == epoch:  # the same session met again (a link
+            counter = known[1]  # came back): what it sent since we first met still counts
         self._verified[sender] = (epoch, counter)
         self._verified[sender] = self._verified.pop(sender)  # most recent last
         while len(self._verified) > self.sessions:

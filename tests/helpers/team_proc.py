@@ -73,7 +73,24 @@ async def and_outage(robot: None, team: RunTeam, hold: float) -> dict[str, str]:
     return results
 
 
-PROGRAMS = {"ties": ties, "cleanup": cleanup, "and_wait": and_wait, "and_outage": and_outage}
+async def or_outage(robot: None, team: RunTeam, hold: float) -> str:
+    """OR whose operations end while the network is down (the first by name finishes first)."""
+
+    async def op() -> str:
+        await asyncio.sleep(hold + 0.1 * sorted(team.members).index(team.me))
+        return team.me
+
+    outcome = await team.distributed_or(op)
+    return str(outcome.winner)
+
+
+PROGRAMS = {
+    "ties": ties,
+    "cleanup": cleanup,
+    "and_wait": and_wait,
+    "and_outage": and_outage,
+    "or_outage": or_outage,
+}
 
 
 if __name__ == "__main__":
