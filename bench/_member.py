@@ -33,6 +33,47 @@ async def bench_or(robot: None, team: RunTeam, rounds: int) -> list[list[Any]]:
     return out
 
 
+async def bench_raw_or(robot: None, team: RunTeam, rounds: int) -> list[list[Any]]:
+    """The floor of an OR step, without mover: the winner's one zenoh put to every member, and
+    each member cancelling its operation when the put arrives (handed into its loop). The
+    rounds are kept in step by an untimed mover AND between them."""
+    session = team.node.zenoh_session
+    loop = asyncio.get_running_loop()
+    got: asyncio.Queue[tuple[str, str]] = asyncio.Queue()
+
+    def on_sample(sample: Any) -> None:
+        item = (str(sample.key_expr), sample.payload.to_bytes().decode())
+        loop.call_soon_threadsafe(got.put_nowait, item)
+
+    sub = session.declare_subscriber("bench/raw-or/**", on_sample)
+    out = []
+    try:
+        await asyncio.sleep(0.5)  # the subscriptions reach every member
+        for k in range(rounds):
+            await team.distributed_and(lambda: asyncio.sleep(0))  # untimed: a barrier
+            winner = team.members[k % len(team.members)]
+            finished = [0.0]
+
+            async def op(
+                winner: str = winner, finished: list[float] = finished, k: int = k
+            ) -> None:
+                await asyncio.sleep(0.005 if team.me == winner else 10.0)
+                finished[0] = time.time()
+                session.put(f"bench/raw-or/{k}", team.me.encode())
+
+            task = asyncio.ensure_future(op())
+            while True:
+                key, who = await asyncio.wait_for(got.get(), 20)
+                if key == f"bench/raw-or/{k}":
+                    break
+            task.cancel()
+            await asyncio.gather(task, return_exceptions=True)
+            out.append([finished[0], time.time(), who, 1])
+    finally:
+        sub.undeclare()
+    return out
+
+
 async def bench_and(
     robot: None, team: RunTeam, rounds: int, designated: bool, seed: int
 ) -> list[list[Any]]:
@@ -56,5 +97,5 @@ async def bench_and(
 if __name__ == "__main__":
     p = argparse.ArgumentParser()
     p.add_argument("--name", required=True)
-    programs = {"bench_or": bench_or, "bench_and": bench_and}
+    programs = {"bench_or": bench_or, "bench_raw_or": bench_raw_or, "bench_and": bench_and}
     asyncio.run(serve_programs(p.parse_args().name, programs))

@@ -7,7 +7,9 @@ OR latency — from the first member's operation finishing to the last member's 
 and AND latency — from the last member finishing to the last continuation — for the
 designated-member variant; and messages per step (signed envelopes: requests and replies,
 summed over members) for OR, AND all-to-all and AND designated, beside n, n² and the bounds
-(OR 2n, AND designated 2(n-1), AND all-to-all 2n(n-1)). The last line is one JSON object.
+(OR 2n, AND designated 2(n-1), AND all-to-all 2n(n-1)). In the same run, the raw floor of an
+OR step (the winner's one zenoh put to every member and the losers' cancel, no mover) gives
+``or_ratio_vs_raw_N = or_p50_ms_N / or_raw_p50_ms_N``. The last line is one JSON object.
 """
 
 from __future__ import annotations
@@ -63,6 +65,7 @@ async def measure(n: int, rounds: int, seed: int) -> dict[str, float]:
             await node.team.wait_for(names, timeout=60)
             await asyncio.sleep(1.0)
             or_runs = await launch(node, "bench_or", names, {"rounds": rounds}, run=f"or{n}")
+            raw_runs = await launch(node, "bench_raw_or", names, {"rounds": rounds}, run=f"raw{n}")
             and_runs = await launch(
                 node,
                 "bench_and",
@@ -81,21 +84,25 @@ async def measure(n: int, rounds: int, seed: int) -> dict[str, float]:
             for p in procs:
                 p.kill()
                 await p.wait()
-    for runs in (or_runs, and_runs, all_runs):
+    for runs in (or_runs, raw_runs, and_runs, all_runs):
         failed = {m: o["error"] for m, o in runs.items() if "error" in o}
         if failed:
             raise RuntimeError(f"n={n}: {failed}")
-    per_member = [o["result"] for o in or_runs.values()]
-    or_lat, or_msgs, agree = [], [], True
-    for k in range(rounds):
-        rows = [r[k] for r in per_member]
-        winners = {r[2] for r in rows}
-        agree = agree and len(winners) == 1
-        first = min(r[0] for r in rows if r[0] > 0)
-        or_lat.append((max(r[1] for r in rows) - first) * 1000)
-        or_msgs.append(sum(r[3] for r in rows))
-    if not agree:
-        raise RuntimeError(f"n={n}: members disagreed on a winner")
+
+    def or_stats(runs: dict[str, Any]) -> tuple[list[float], list[int]]:
+        per_member = [o["result"] for o in runs.values()]
+        lat, msgs = [], []
+        for k in range(rounds):
+            rows = [r[k] for r in per_member]
+            if len({r[2] for r in rows}) != 1:
+                raise RuntimeError(f"n={n}: members disagreed on a winner")
+            first = min(r[0] for r in rows if r[0] > 0)
+            lat.append((max(r[1] for r in rows) - first) * 1000)
+            msgs.append(sum(r[3] for r in rows))
+        return lat, msgs
+
+    or_lat, or_msgs = or_stats(or_runs)
+    raw_lat, _ = or_stats(raw_runs)
 
     def and_stats(runs: dict[str, Any], count: int) -> tuple[list[float], list[int]]:
         members = [o["result"] for o in runs.values()]
@@ -111,6 +118,8 @@ async def measure(n: int, rounds: int, seed: int) -> dict[str, float]:
     return {
         "or_p50_ms": round(statistics.median(or_lat), 3),
         "or_p99_ms": round(pct(or_lat, 99), 3),
+        "or_raw_p50_ms": round(statistics.median(raw_lat), 3),
+        "or_ratio_vs_raw": round(statistics.median(or_lat) / statistics.median(raw_lat), 3),
         "and_p50_ms": round(statistics.median(and_lat), 3),
         "and_p99_ms": round(pct(and_lat, 99), 3),
         "or_msgs": round(statistics.mean(or_msgs), 2),
@@ -123,14 +132,16 @@ async def main(args: argparse.Namespace) -> None:
     figures: dict[str, float] = {}
     print(f"seed {args.seed}, {args.rounds} rounds per collective")
     print(
-        f"{'n':>3} {'OR p50':>8} {'OR p99':>8} {'AND p50':>8} {'AND p99':>8} "
+        f"{'n':>3} {'OR p50':>8} {'OR p99':>8} {'raw OR':>8} {'ratio':>6} "
+        f"{'AND p50':>8} {'AND p99':>8} "
         f"{'OR msgs':>8} {'<=2n':>5} {'AND-d':>6} {'<=2(n-1)':>8} {'AND-all':>8} "
         f"{'2n(n-1)':>8} {'n^2':>5}"
     )
     for n in args.sizes:
         r = await measure(n, args.rounds, args.seed)
         print(
-            f"{n:>3} {r['or_p50_ms']:>8.2f} {r['or_p99_ms']:>8.2f} {r['and_p50_ms']:>8.2f} "
+            f"{n:>3} {r['or_p50_ms']:>8.2f} {r['or_p99_ms']:>8.2f} {r['or_raw_p50_ms']:>8.2f} "
+            f"{r['or_ratio_vs_raw']:>6.2f} {r['and_p50_ms']:>8.2f} "
             f"{r['and_p99_ms']:>8.2f} {r['or_msgs']:>8.1f} {2 * n:>5} "
             f"{r['and_designated_msgs']:>6.1f} {2 * (n - 1):>8} {r['and_all_msgs']:>8.1f} "
             f"{2 * n * (n - 1):>8} {n * n:>5}",
