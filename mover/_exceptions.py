@@ -16,6 +16,7 @@
     │       ├── RobotLost          the callee left the team (died, hung, cut off) mid-call
     │       └── UnknownRobot       no team member of that name answers
     ├── MemberLost                 a member of a collective step left before it finished
+    ├── NameTaken                  a live member already holds the name a node would take
     └── NodeClosed                 the node was closed while the operation was pending
 
 Errors cross processes as data (type name and message), never as pickled objects.
@@ -100,6 +101,14 @@ class MemberLost(MoverError):
     def __init__(self, message: str, *, members: frozenset[str] = frozenset()) -> None:
         super().__init__(message)
         self.members = members
+
+
+class NameTaken(MoverError):
+    """A live member of the team already holds the name; ``holder`` says who (pid, host)."""
+
+    def __init__(self, message: str, *, holder: object = None) -> None:
+        super().__init__(message)
+        self.holder = holder
 
 
 # Errors a callee may report by name; anything else arrives as RemoteError.

@@ -11,6 +11,7 @@ one-second lease) makes the member leave.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import logging
 import os
 import time
@@ -222,6 +223,54 @@ class Membership:
             del self._asked[next(iter(self._asked))]
         self._hello(name, attempt=_HELLO_RETRIES, join=False)
 
+    def _open_hello(self, frame: bytes, name: str, challenge: bytes) -> tuple[Any, MemberInfo]:
+        """The envelope and member info of an authentic hello answering ``challenge``."""
+        env = self._node._opener.open(frame)
+        p = env.payload
+        try:
+            if env.kind != "hello" or env.sender != name or p.get("challenge") != challenge:
+                raise WireError("hello does not answer our challenge")
+            info = MemberInfo(
+                name, str(p["kind"]), float(p["started"]), int(p["pid"]), str(p["host"])
+            )
+        except (AttributeError, KeyError, TypeError, ValueError) as exc:
+            raise WireError(f"malformed hello: {exc}") from None
+        return env, info
+
+    async def holders(self, name: str, timeout: float = 1.0) -> list[MemberInfo]:
+        """Other live nodes of the team that answer to ``name`` (this node excluded)."""
+        node = self._node
+        loop = asyncio.get_running_loop()
+        challenge = os.urandom(16)
+        found: list[MemberInfo] = []
+        finished: asyncio.Future[None] = loop.create_future()
+
+        def on_reply(reply: Any) -> None:
+            if reply.ok is None:
+                return
+            try:
+                env, info = self._open_hello(reply.ok.payload.to_bytes(), name, challenge)
+            except WireError:
+                return
+            if env.epoch != node._sealer.epoch:
+                found.append(info)
+
+        def on_done(_: Any) -> None:
+            if not finished.done():
+                finished.set_result(None)
+
+        node._session.get(
+            _keys.hello(node.team_name, name),
+            node._portal.callback(on_reply, on_done),
+            payload=challenge,
+            target=zenoh.QueryTarget.ALL,
+            consolidation=zenoh.ConsolidationMode.NONE,
+            timeout=timeout,
+        )
+        with contextlib.suppress(TimeoutError):
+            await asyncio.wait_for(asyncio.shield(finished), timeout + 0.5)
+        return found
+
     def _verified(self, name: str, epoch: bytes | None) -> None:
         for future in self._verifying.get(name, ()):
             if not future.done():
@@ -236,14 +285,8 @@ class Membership:
             if reply.ok is None or state["ok"]:
                 return
             try:
-                env = node._opener.open(reply.ok.payload.to_bytes())
-                p = env.payload
-                if env.kind != "hello" or env.sender != name or p.get("challenge") != challenge:
-                    raise WireError("hello does not answer our challenge")
-                info = MemberInfo(
-                    name, str(p["kind"]), float(p["started"]), int(p["pid"]), str(p["host"])
-                )
-            except (WireError, AttributeError, KeyError, TypeError, ValueError) as exc:
+                env, info = self._open_hello(reply.ok.payload.to_bytes(), name, challenge)
+            except WireError as exc:
                 node._refusal_log.warn(name, f"hello from {name!r} refused: {exc}")
                 return
             state["ok"] = True

@@ -23,7 +23,7 @@ import zenoh
 from . import _keys
 from ._bridge import Portal, run_blocking, sample_size
 from ._config import NodeConfig, Team
-from ._exceptions import MoverError, PayloadTooLarge, WireError
+from ._exceptions import MoverError, NameTaken, PayloadTooLarge, WireError
 from ._membership import Membership
 from ._radio import Locator, Message, Neighbour, Radio, RadioModel, Subscription
 from ._rpc import RpcClient, RpcServer, procedures_of
@@ -81,6 +81,7 @@ class Node:
         max_size: int = DEFAULT_MAX_SIZE,
         on_refused: Literal["reply", "ignore"] = "reply",
         observer: bool = False,
+        unique: bool = False,
     ) -> None:
         self.name = _keys.check_name("robot", name)
         self.team_config = team
@@ -88,6 +89,7 @@ class Node:
         self.config = config or NodeConfig()
         self.on_refused = on_refused
         self.observer = observer
+        self.unique = unique
         self.started = time.time()
         self.stats: Counter[str] = Counter()
         self.radio = Radio(locator, radio)
@@ -137,6 +139,8 @@ class Node:
                 _keys.hello(team, self.name), portal.callback(self.team.on_hello_query)
             ),
         ]
+        if self.unique:
+            await self._refuse_a_taken_name()
         if not self.observer:
             self._declared.append(session.liveliness().declare_token(_keys.alive(team, self.name)))
         self._declared.append(
@@ -145,6 +149,22 @@ class Node:
             )
         )
         return self
+
+    async def _refuse_a_taken_name(self) -> None:
+        """Refuse to start (NameTaken) if a live node of the team already answers to our name."""
+        if self.config.connect:  # first reach the team, for at most 2 s
+            deadline = time.monotonic() + 2.0
+            while not self.connected() and time.monotonic() < deadline:  # noqa: ASYNC110
+                await asyncio.sleep(0.02)  # zenoh offers no event for this: poll
+        holders = await self.team.holders(self.name)
+        if holders:
+            h = holders[0]
+            await self.close()
+            raise NameTaken(
+                f"the name {self.name!r} is taken in team {self.team_name!r}: "
+                f"{h.kind} pid {h.pid} on {h.host} holds it",
+                holder=h,
+            )
 
     async def close(self) -> None:
         """Leave the team: cancel served calls, fail pending ones, close the session."""

@@ -152,7 +152,7 @@ async def serve_programs(
         if __name__ == "__main__":
             asyncio.run(serve_programs(sys.argv[1], {"my_program": my_program}))
     """
-    async with Node(name, Team.from_env(), config=NodeConfig.from_env()) as node:
+    async with Node(name, Team.from_env(), config=NodeConfig.from_env(), unique=True) as node:
         ProgramHost(node, programs, robot=None)
         await node.team.wait_for({name}, timeout=timeout)
         print("READY", flush=True)

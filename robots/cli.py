@@ -18,6 +18,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from mover import NameTaken
 from mover.cli import (
     UsageError,
     add_log_arguments,
@@ -136,7 +137,7 @@ def run(args: argparse.Namespace) -> int:
                 ready=lambda: print("READY", flush=True),
             )
         )
-    except ValueError as exc:  # an unknown backend or option, found before anything starts
+    except (ValueError, NameTaken) as exc:  # found before anything starts
         raise UsageError(str(exc)) from None
     return 0
 

@@ -91,7 +91,7 @@ async def run_robot(
     go to its ``connect`` and are checked against its ``options`` before anything starts.
     """
     backend = load_backend(hardware, options)
-    async with Node(name, team, kind=kind, config=config) as node:
+    async with Node(name, team, kind=kind, config=config, unique=True) as node:
         if programs is None:
             programs = installed_programs()
         # Export first, so that a launcher that sees this member can start programs at once;

@@ -183,7 +183,7 @@ async def run_world_process(
     tick ``until_tick``, until every robot has left (``quit_when_empty``), or until cancelled."""
     from mover import Node
 
-    async with Node(name, team=team, kind="world", config=config) as node:
+    async with Node(name, team=team, kind="world", config=config, unique=True) as node:
         export(node, door)
         log.info("world serving as %r", name)
         if ready is not None:

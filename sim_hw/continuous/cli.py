@@ -14,6 +14,7 @@ import math
 from pathlib import Path
 from typing import Any
 
+from mover import NameTaken
 from mover.cli import UsageError
 from sim_hw._process import add_world_arguments, positive
 
@@ -93,6 +94,8 @@ def run_world(args: argparse.Namespace) -> int:
                 config=config,
             )
         )
+    except NameTaken as exc:
+        raise UsageError(str(exc)) from None
     finally:
         if recorder is not None:
             recorder.close()

@@ -26,6 +26,7 @@ import logging
 from pathlib import Path
 from typing import Any
 
+from mover import NameTaken
 from mover.cli import UsageError
 from sim_hw._process import add_world_arguments
 
@@ -240,6 +241,8 @@ def run(args: argparse.Namespace) -> int:
         )
     except KeyboardInterrupt:
         return 130
+    except NameTaken as exc:
+        raise UsageError(str(exc)) from None
     finally:
         if args.snapshots:
             _write_snapshot(server, Path(args.snapshots))
