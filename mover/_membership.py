@@ -111,6 +111,10 @@ class Membership:
             while len(self._members) < n:
                 await self._wait_change()
 
+    def has_token(self, name: str) -> bool:
+        """Whether some node holds ``name``'s liveliness token now (verified or not)."""
+        return name in self._tokens
+
     def on_leave(self, callback: Callable[[str], None]) -> None:
         """Call ``callback(name)`` on the loop whenever a member leaves."""
         self._on_leave.append(callback)

@@ -139,15 +139,15 @@ class Node:
                 _keys.hello(team, self.name), portal.callback(self.team.on_hello_query)
             ),
         ]
-        if self.unique:
-            await self._refuse_a_taken_name()
-        if not self.observer:
-            self._declared.append(session.liveliness().declare_token(_keys.alive(team, self.name)))
         self._declared.append(
             session.liveliness().declare_subscriber(
                 _keys.alive(team, "*"), portal.callback(self.team.on_token), history=True
             )
         )
+        if self.unique:
+            await self._refuse_a_taken_name()
+        if not self.observer:
+            self._declared.append(session.liveliness().declare_token(_keys.alive(team, self.name)))
         return self
 
     async def _refuse_a_taken_name(self) -> None:
@@ -156,14 +156,26 @@ class Node:
             deadline = time.monotonic() + 2.0
             while not self.connected() and time.monotonic() < deadline:  # noqa: ASYNC110
                 await asyncio.sleep(0.02)  # zenoh offers no event for this: poll
+        # The liveliness history says who is there: a token of our name is a holder.
+        deadline = time.monotonic() + 0.5
+        while not self.team.has_token(self.name) and time.monotonic() < deadline:  # noqa: ASYNC110
+            await asyncio.sleep(0.02)
         holders = await self.team.holders(self.name)
-        if holders:
-            h = holders[0]
+        for _ in range(5):  # its token is there: its hello may take a moment to be routed
+            if holders or not self.team.has_token(self.name):
+                break
+            await asyncio.sleep(0.2)
+            holders = await self.team.holders(self.name)
+        if holders or self.team.has_token(self.name):
             await self.close()
+            who = (
+                f"{holders[0].kind} pid {holders[0].pid} on {holders[0].host}"
+                if holders
+                else "a node that does not answer"
+            )
             raise NameTaken(
-                f"the name {self.name!r} is taken in team {self.team_name!r}: "
-                f"{h.kind} pid {h.pid} on {h.host} holds it",
-                holder=h,
+                f"the name {self.name!r} is taken in team {self.team_name!r}: {who} holds it",
+                holder=holders[0] if holders else None,
             )
 
     async def close(self) -> None:
