@@ -39,7 +39,7 @@ from collections.abc import Awaitable, Callable, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Literal
 
-from ._exceptions import MemberLost, NotDelivered
+from ._exceptions import MemberLost, NotDelivered, WireError
 
 if TYPE_CHECKING:
     from ._node import Node
@@ -86,13 +86,50 @@ class StepMetrics:
 # -- the designated member's side -----------------------------------------------------------------
 
 
+@dataclass(frozen=True)
+class Decision:
+    """A step's decision: who won an OR (``won``), every result of an AND (``all``), or who
+    was lost (``lost``). One type from the designated member to every member; on the wire a
+    map (:meth:`to_wire`), read back by :meth:`from_wire`, which refuses anything else."""
+
+    kind: Literal["won", "all", "lost"]
+    winner: str = ""
+    result: Any = None
+    results: dict[str, Any] = field(default_factory=dict)
+    lost: tuple[str, ...] = ()
+
+    def to_wire(self) -> dict[str, Any]:
+        """The decision as a msgpack-able map."""
+        if self.kind == "won":
+            return {"kind": "won", "winner": self.winner, "result": self.result}
+        if self.kind == "all":
+            return {"kind": "all", "results": self.results}
+        return {"kind": "lost", "lost": list(self.lost)}
+
+    @classmethod
+    def from_wire(cls, value: Any) -> Decision:
+        """The decision in ``value``; raise WireError if it is not one."""
+        kind = value.get("kind") if isinstance(value, dict) else None
+        if kind == "won" and isinstance(value.get("winner"), str):
+            return cls("won", winner=value["winner"], result=value.get("result"))
+        if kind == "all" and isinstance(value.get("results"), dict):
+            results = value["results"]
+            if all(isinstance(m, str) for m in results):
+                return cls("all", results=results)
+        if kind == "lost" and isinstance(value.get("lost"), list):
+            lost = value["lost"]
+            if all(isinstance(m, str) for m in lost):
+                return cls("lost", lost=tuple(lost))
+        raise WireError(f"not a decision: {value!r:.80}")
+
+
 @dataclass
 class _Step:
     members: frozenset[str]
     joined: set[str] = field(default_factory=set)
     claims: list[tuple[str, Any]] = field(default_factory=list)
     results: dict[str, Any] = field(default_factory=dict)
-    decision: asyncio.Future[list[Any]] = field(
+    decision: asyncio.Future[Decision] = field(
         default_factory=lambda: asyncio.get_running_loop().create_future()
     )
     takeover: bool = False  # this member took over from a designated member that is gone
@@ -109,7 +146,7 @@ class Collectives:
         self.policy = policy
         self._steps: dict[tuple[str, int], _Step] = {}
         # OR decisions as announced by designated members (one broadcast per step)
-        self._heard: dict[tuple[str, int], asyncio.Future[list[Any]]] = {}
+        self._heard: dict[tuple[str, int], asyncio.Future[Decision]] = {}
         self._announcements = node.subscribe(DECIDED_TOPIC)
         self._listener = asyncio.get_running_loop().create_task(self._listen())
         node.export(self.or_join, "mover.or_join")
@@ -129,6 +166,11 @@ class Collectives:
                 state.decision.add_done_callback(lambda _: self._announce(run, step, state))
             state.lost = [m for m in members if m < self.node.name and m not in self.node.team]
             state.takeover = bool(state.lost)
+            heard = self._heard.get(key)
+            if state.takeover and heard is not None and heard.done():
+                # A successor that heard the lost member's announcement decides the same at
+                # once: the members that moved on with it will never ask.
+                state.decision.set_result(heard.result())
             while len(self._steps) > _STEP_MEMORY:
                 # The oldest goes, decided or not: a member that opens steps that are never
                 # decided (a bug, or a member gone rogue) cannot make this one hold them all.
@@ -147,7 +189,7 @@ class Collectives:
                     old.decision.exception()  # retrieved: it may have no waiter left
         return state
 
-    def heard(self, run: str, step: int) -> asyncio.Future[list[Any]]:
+    def heard(self, run: str, step: int) -> asyncio.Future[Decision]:
         """The decision of OR step ``(run, step)`` once announced (a future)."""
         future = self._heard.get((run, step))
         if future is None:
@@ -159,18 +201,21 @@ class Collectives:
     async def _listen(self) -> None:
         async for message in self._announcements:
             data = message.data
-            if not (
-                isinstance(data, list)
-                and len(data) == 3
-                and isinstance(data[0], str)
-                and type(data[1]) is int
-                and isinstance(data[2], list)
-            ):  # any decodable frame may come: only a well-formed decision counts
-                self.node._refusal_log.warn(message.sender, "dropped a malformed decision")
+            try:  # any decodable frame may come: only a well-formed decision counts
+                if not (
+                    isinstance(data, list)
+                    and len(data) == 3
+                    and isinstance(data[0], str)
+                    and type(data[1]) is int
+                ):
+                    raise WireError("not [run, step, decision]")
+                decision = Decision.from_wire(data[2])
+            except WireError as exc:
+                self.node._refusal_log.warn(message.sender, f"dropped a decision: {exc}")
                 continue
             future = self.heard(data[0], data[1])
             if not future.done():
-                future.set_result(data[2])
+                future.set_result(decision)
 
     def _announce(self, run: str, step: int, state: _Step) -> None:
         """Tell the members the decision: one broadcast, unless every one of them has asked."""
@@ -185,7 +230,8 @@ class Collectives:
             local.set_result(decision)
         others = state.members - {self.node.name}
         if not others <= state.joined:  # those who asked (or claimed) get it in their answer
-            self.node.broadcast_nowait(DECIDED_TOPIC, [run, step, decision], reliable=True)
+            wire = [run, step, decision.to_wire()]
+            self.node.broadcast_nowait(DECIDED_TOPIC, wire, reliable=True)
             state.announced = len(others)
 
     def announced(self, run: str, step: int) -> int:
@@ -200,27 +246,23 @@ class Collectives:
     def _expected(self, state: _Step) -> set[str]:
         return {m for m in state.members if m in self.node.team}
 
-    async def or_join(
-        self, run: str, step: int, member: str, members: list[str], known: list[Any] | None = None
-    ) -> list[Any]:
-        """A member waits for the decision (and tells what it knows after a takeover)."""
+    async def or_join(self, run: str, step: int, member: str, members: list[str]) -> Any:
+        """A member waits for the decision."""
         state = self.step(run, step, members, "or")
         state.joined.add(member)
-        if known is not None and not state.decision.done():
-            state.decision.set_result(known)
         self._maybe_decide(state)
-        return await asyncio.shield(state.decision)
+        return (await asyncio.shield(state.decision)).to_wire()
 
     async def or_claim(
         self, run: str, step: int, member: str, members: list[str], result: Any
-    ) -> list[Any]:
+    ) -> Any:
         """A member finished its operation: it wins unless someone claimed first."""
         state = self.step(run, step, members, "or")
         state.joined.add(member)
         if all(m != member for m, _ in state.claims):
             state.claims.append((member, result))
         self._maybe_decide(state)
-        return await asyncio.shield(state.decision)
+        return (await asyncio.shield(state.decision)).to_wire()
 
     def _maybe_decide(self, state: _Step) -> None:
         if state.decision.done():
@@ -229,20 +271,20 @@ class Collectives:
             if not self._expected(state) <= state.joined:
                 return  # a successor decides only once every live member has said what it knows
             if state.lost and self.policy == "fail":
-                state.decision.set_result(["lost", state.lost])
+                state.decision.set_result(Decision("lost", lost=tuple(state.lost)))
                 return
         if state.claims:
             winner, result = state.claims[0]
-            state.decision.set_result(["won", winner, result])
+            state.decision.set_result(Decision("won", winner=winner, result=result))
 
     async def and_done(
         self, run: str, step: int, member: str, members: list[str], result: Any
-    ) -> list[Any]:
+    ) -> Any:
         """A member finished: record its result; answer when every live member has."""
         state = self.step(run, step, members)
         state.results[member] = result
         self._maybe_complete(state)
-        return await asyncio.shield(state.decision)
+        return (await asyncio.shield(state.decision)).to_wire()
 
     def and_put(self, run: str, step: int, member: str, members: list[str], result: Any) -> None:
         """All-to-all: a member's result, sent to every other member."""
@@ -254,13 +296,14 @@ class Collectives:
         if state.decision.done():
             return
         if state.lost and self.policy == "fail":
-            state.decision.set_result(["lost", state.lost])
+            state.decision.set_result(Decision("lost", lost=tuple(state.lost)))
             return
         expected = self._expected(state) | state.results.keys() & state.members
         if self.policy == "fail" and not state.members <= expected:
             return  # _member_left decides the failure
         if expected and expected <= state.results.keys():
-            state.decision.set_result(["all", {m: state.results[m] for m in sorted(expected)}])
+            results = {m: state.results[m] for m in sorted(expected)}
+            state.decision.set_result(Decision("all", results=results))
 
     def _member_left(self, name: str) -> None:
         if not self.node.connected():
@@ -270,9 +313,9 @@ class Collectives:
                 continue
             alive = self._expected(state)
             if not alive:
-                state.decision.set_result(["lost", sorted(state.members)])
+                state.decision.set_result(Decision("lost", lost=tuple(sorted(state.members))))
             elif self.policy == "fail" and name not in state.results:
-                state.decision.set_result(["lost", [name]])
+                state.decision.set_result(Decision("lost", lost=(name,)))
             else:
                 self._maybe_decide(state)
                 self._maybe_complete(state)
@@ -335,15 +378,15 @@ class TaskTeam:
                 op.cancel()
             await asyncio.gather(op, return_exceptions=True)  # the losers' cleanup runs here
         metrics.continued = time.perf_counter()
-        if decision[0] == "lost":
+        if decision.kind == "lost":
             raise MemberLost(
-                f"step {metrics.step} of run {self.run!r} lost {decision[1]}",
-                members=frozenset(decision[1]),
+                f"step {metrics.step} of run {self.run!r} lost {list(decision.lost)}",
+                members=frozenset(decision.lost),
             )
-        outcome = Outcome(decision[1], decision[2])
+        outcome = Outcome(decision.winner, decision.result)
         return await continuation(outcome) if continuation else outcome
 
-    async def _or_decision(self, metrics: StepMetrics, op: asyncio.Future[Any]) -> list[Any]:
+    async def _or_decision(self, metrics: StepMetrics, op: asyncio.Future[Any]) -> Decision:
         """Wait for the step's decision: claim it if ``op`` finishes first, else hear it.
 
         The designated member announces each decision once (one broadcast); a member that has
@@ -363,10 +406,9 @@ class TaskTeam:
         self,
         metrics: StepMetrics,
         op: asyncio.Future[Any],
-        heard: asyncio.Future[list[Any]],
+        heard: asyncio.Future[Decision],
         designated: str,
-    ) -> list[Any]:
-        known: list[Any] | None = None
+    ) -> Decision:
         poll: asyncio.Future[Any] | None = None
         poll_at = time.monotonic() + POLL_AFTER
         while True:
@@ -375,14 +417,13 @@ class TaskTeam:
                 if heard.done():
                     return heard.result()
                 if poll is not None and poll.done():
-                    decision: list[Any] = poll.result()  # raises _Retry if the poll failed
-                    return decision
+                    return Decision.from_wire(poll.result())  # raises _Retry if it failed
                 if op.done() and not op.cancelled() and op.exception() is None:
                     metrics.finished = metrics.finished or time.perf_counter()
-                    decision = await self._ask(
+                    answer = await self._ask(
                         metrics, designated, "mover.or_claim", *args, op.result()
                     )
-                    return decision
+                    return Decision.from_wire(answer)
                 waiting: set[asyncio.Future[Any]] = {heard}
                 if not op.done():
                     waiting.add(op)
@@ -394,7 +435,7 @@ class TaskTeam:
                 )
                 if not done and poll is None:
                     poll = asyncio.ensure_future(
-                        self._ask(metrics, designated, "mover.or_join", *args, known)
+                        self._ask(metrics, designated, "mover.or_join", *args)
                     )
                     poll.add_done_callback(_quiet)
                 elif op in done and op.exception() is not None:
@@ -404,8 +445,7 @@ class TaskTeam:
                         metrics.step,
                         op.exception(),
                     )
-            except _Retry as retry:
-                known = retry.known or known
+            except _Retry:
                 await self._recover(designated)
                 designated = await self._designated()
                 poll, poll_at = None, time.monotonic()  # ask the (new) designated member now
@@ -437,21 +477,21 @@ class TaskTeam:
         else:
             decision = await self._and_all(metrics, wire)
         metrics.continued = time.perf_counter()
-        if decision[0] == "lost":
+        if decision.kind == "lost":
             raise MemberLost(
-                f"step {metrics.step} of run {self.run!r} lost {decision[1]}",
-                members=frozenset(decision[1]),
+                f"step {metrics.step} of run {self.run!r} lost {list(decision.lost)}",
+                members=frozenset(decision.lost),
             )
         if error is not None:
             raise error
-        results = {m: _unwire(r) for m, r in decision[1].items()}
+        results = {m: _unwire(r) for m, r in decision.results.items()}
         return await continuation(results) if continuation else results
 
-    async def _and_designated(self, metrics: StepMetrics, result: Any) -> list[Any]:
+    async def _and_designated(self, metrics: StepMetrics, result: Any) -> Decision:
         while True:
             designated = await self._designated()
             try:
-                decision: list[Any] = await self._ask(
+                answer = await self._ask(
                     metrics,
                     designated,
                     "mover.and_done",
@@ -461,11 +501,11 @@ class TaskTeam:
                     self.members,
                     result,
                 )
-                return decision
+                return Decision.from_wire(answer)
             except _Retry:
                 await self._recover(designated)
 
-    async def _and_all(self, metrics: StepMetrics, result: Any) -> list[Any]:
+    async def _and_all(self, metrics: StepMetrics, result: Any) -> Decision:
         state = self.collectives.step(self.run, metrics.step, self.members)
 
         async def send(member: str) -> None:
@@ -488,8 +528,7 @@ class TaskTeam:
         self.collectives.and_put(self.run, metrics.step, self.me, self.members, result)
         senders = [asyncio.ensure_future(send(m)) for m in self.members if m != self.me]
         try:
-            decision: list[Any] = await asyncio.shield(state.decision)
-            return decision
+            return await asyncio.shield(state.decision)
         finally:
             await asyncio.gather(*senders, return_exceptions=True)
 
@@ -571,9 +610,7 @@ def _quiet(task: asyncio.Future[Any]) -> None:
 
 
 class _Retry(Exception):
-    def __init__(self, why: str, known: list[Any] | None = None) -> None:
-        super().__init__(why)
-        self.known = known
+    """A collective's call was not delivered: recover, then ask (the new designated) again."""
 
 
 def _unwire(value: Any) -> Any:

@@ -220,3 +220,20 @@ async def test_steps_that_are_never_decided_stay_bounded(nodes: list[Node]) -> N
     for call in calls:
         call.cancel()
     await asyncio.gather(*calls, return_exceptions=True)
+
+
+async def test_a_successor_that_heard_the_decision_hands_it_on(nodes: list[Node]) -> None:
+    """The designated member (n0) announced, then died; a member that missed the announcement
+    asks the successor (n1), which heard it and moved on: it answers at once, the same."""
+    from mover._tasks import Collectives, Decision
+
+    n0, n1, n2 = nodes[:3]
+    members = [n.name for n in nodes]
+    successor = Collectives(n1)
+    heard = Decision("won", winner="n3", result=7)
+    successor.heard("r", 1).set_result(heard)  # as its listener would, from n0's broadcast
+    await n0.close()
+    await n1.team.wait_gone("n0", timeout=10)
+    await n2.team.wait_gone("n0", timeout=10)
+    answer = await n2.call("n1", "mover.or_join", "r", 1, "n2", members, timeout=3)
+    assert Decision.from_wire(answer) == heard
