@@ -77,6 +77,11 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         ("--k-sig", walk.k_sig, "k_rep of a signature"),
     ):
         parser.add_argument(flag, type=float, default=default, help=f"{what} ({default:g})")
+    parser.add_argument(
+        "--own-signatures",
+        action="store_true",
+        help="L+P: a robot is repelled by the targets it marked itself too (the paper: others)",
+    )
     parser.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
     parser.add_argument(
         "--save",
@@ -115,6 +120,7 @@ def settings(args: argparse.Namespace) -> LevySettings:
         k_rep=args.k_rep,
         signature_range=args.signature_range,
         k_sig=args.k_sig,
+        own_signatures=args.own_signatures,
     )
     setup = replace(
         Setup(),

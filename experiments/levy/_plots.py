@@ -8,8 +8,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ._paper import ORDER, Setup
-from ._report import Records, times
+from robots.library import stable_alpha
+
+from ._paper import ALPHA_TARGETS, ORDER, Setup
+from ._report import Records, estimate, times
 
 _LABELS = {"fig8": "targets", "fig9": "robots", "alpha": "alpha"}
 _TITLES = {
@@ -38,6 +40,17 @@ def plot(sweep: str, records: Records, setup: Setup, out: Path) -> Path:
         ys = [float(np.mean(t)) for t in ts]
         es = [float(np.std(t, ddof=1) / np.sqrt(len(t))) if len(t) > 1 else 0.0 for t in ts]
         ax.errorbar(xs, ys, yerr=es, marker="o", ms=4, capsize=3, label=m)
+    if sweep == "fig9":  # log-log: the ideal T(1)/n of the Lévy walk is a straight line
+        lone = [r for r in records if r["method"] == "L" and r["robots"] == 1]
+        ns = sorted({r["robots"] for r in records})
+        if lone and len(ns) > 1:
+            t1 = float(np.mean(times(lone, setup.max_time)))
+            ax.plot(ns, [t1 / n for n in ns], "k:", lw=1, label="L: T(1)/n")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+    if sweep == "alpha":
+        mu = estimate(setup, ALPHA_TARGETS)[1]
+        ax.axvline(stable_alpha(mu), color="k", ls=":", lw=1, label="eq. 4-5 (non-destructive)")
     ax.set_xlabel(key)
     ax.set_ylabel("time to find all targets (s)")
     ax.set_title(_TITLES[sweep], fontsize=9)

@@ -85,12 +85,17 @@ def saturation(records: Records, setup: Setup) -> str:
     return "\n".join(out)
 
 
+def estimate(setup: Setup, targets: int) -> tuple[float, float]:
+    """λ, the mean free path between targets (1/(2 r_v ρ), ρ their density), and
+    Viswanathan's μ for it (eq. 4-5)."""
+    lam = 1.0 / (2.0 * setup.walk.sense_range * targets / setup.size**2)
+    return lam, viswanathan_mu(lam, setup.walk.sense_range)
+
+
 def theory(setup: Setup, targets: int) -> str:
     """What the theory predicts for the α sweep: Viswanathan's estimate (eq. 4-5) for
     non-destructive search, and that destructive search's optimum is ballistic."""
-    density = targets / setup.size**2
-    lam = 1.0 / (2.0 * setup.walk.sense_range * density)  # mean free path between targets
-    mu = viswanathan_mu(lam, setup.walk.sense_range)
+    lam, mu = estimate(setup, targets)
     return (
         f"theory: λ = 1/(2 r_v ρ) = {lam:.1f} m for {targets} targets (r_v = "
         f"{setup.walk.sense_range:g} m); non-destructive optimum (eq. 4-5) μ = {mu:.2f}, "

@@ -127,6 +127,17 @@ def test_a_marked_target_turns_away_a_robot_within_the_signature_range() -> None
     assert unmarked.w == 0.0
 
 
+def test_the_finder_is_not_turned_back_by_its_own_mark() -> None:
+    finder = walker("L+P", np.random.default_rng(1))
+    assert finder.step(sense(targets=(target(0.8, 0.3),))).mark == "t0"
+    mine = (target(0.8, 0.3, MARKED), target(2.5, -0.3, MARKED, "t1"))
+    assert finder.step(sense(targets=mine[:1])).w == 0.0  # "other robots" avoid it (V-B)
+    assert finder.step(sense(targets=mine)).w > 0  # t1 was someone else's find
+    both = walker("L+P", np.random.default_rng(1), params=LevyParams(own_signatures=True))
+    both.step(sense(targets=(target(0.8, 0.3),)))
+    assert both.step(sense(targets=mine[:1])).w < 0
+
+
 def test_robots_within_rho0_turn_a_robot_away_but_obstacles_do_not() -> None:
     lp = walker("L+P", np.random.default_rng(1))
     cmd = lp.step(sense(neighbours=((1.0, -0.5),)))
