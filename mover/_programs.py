@@ -53,6 +53,7 @@ class _Run:
     program: str
     task: asyncio.Task[Any]
     team: RunTeam
+    failed: BaseException | None = None  # why the run was ended from outside (fail_all)
 
 
 class ProgramHost:
@@ -139,11 +140,21 @@ class ProgramHost:
             result = await asyncio.shield(entry.task)
         except asyncio.CancelledError:
             if entry.task.cancelled():
-                return {"error": "cancelled"}
+                why = entry.failed
+                error = f"{type(why).__name__}: {why}" if why is not None else "cancelled"
+                return {"error": error, "steps": _metrics(entry.team)}
             raise
         except Exception as exc:
             return {"error": f"{type(exc).__name__}: {exc}", "steps": _metrics(entry.team)}
         return {"result": result, "steps": _metrics(entry.team)}
+
+    def fail_all(self, reason: BaseException) -> None:
+        """End every run under way here with ``reason`` (its ``finally`` blocks run): the
+        hardware went away, say. Their outcome is the reason, as an error."""
+        for entry in self.runs.values():
+            if not entry.task.done():
+                entry.failed = reason
+                entry.task.cancel()
 
     def installed(self) -> dict[str, str]:
         """The installed programs and their arguments."""

@@ -65,19 +65,30 @@ class Cluster:
         ready: str | None = "READY",
         timeout: float = 30.0,
         config: NodeConfig | None = None,
+        log: str | os.PathLike[str] | None = None,
     ) -> asyncio.subprocess.Process:
-        """Start ``python -m module args``; wait until it prints ``ready`` (None: no wait)."""
+        """Start ``python -m module args``; wait until it prints ``ready`` (None: no wait).
+
+        ``log`` names a file for the process's standard error (its log lines), else it is
+        this process's."""
         env = {**os.environ, **self.env, **(team or self.team).env(), **(config or self.peer).env()}
-        proc = await asyncio.create_subprocess_exec(
-            sys.executable,
-            "-m",
-            module,
-            *args,
-            stdin=asyncio.subprocess.PIPE,
-            stdout=asyncio.subprocess.PIPE,
-            env=env,
-            cwd=self.cwd,
-        )
+        # the child gets its own copy of the file: ours is closed at once
+        err = open(log, "ab") if log is not None else None  # noqa: ASYNC230, SIM115
+        try:
+            proc = await asyncio.create_subprocess_exec(
+                sys.executable,
+                "-m",
+                module,
+                *args,
+                stdin=asyncio.subprocess.PIPE,
+                stdout=asyncio.subprocess.PIPE,
+                stderr=err,
+                env=env,
+                cwd=self.cwd,
+            )
+        finally:
+            if err is not None:
+                err.close()
         self.procs.append(proc)
         if ready is None:
             return proc

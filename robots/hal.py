@@ -31,6 +31,7 @@ __all__ = [
     "FloorCell",
     "FloorCells",
     "Hardware",
+    "HardwareLost",
     "Led",
     "Odometry",
     "PushResult",
@@ -70,6 +71,14 @@ class FloorCell:
 
     value: int
     colour: str
+
+
+class HardwareLost(Exception):
+    """The hardware went away: a simulated world that stopped, a body that dropped the robot.
+
+    Raised by a device call or a clock tick; the robot process waits for the hardware and
+    connects again, and a program that was running fails with it.
+    """
 
 
 @dataclass(frozen=True, slots=True)

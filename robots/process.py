@@ -21,7 +21,8 @@ from typing import Any
 from mover import Node, NodeConfig, ProgramHost, Team
 
 from ._robot import Robot
-from .backend import H, HardwareBackend, check_options
+from .backend import BaseHardware, H, HardwareBackend, check_options
+from .hal import HardwareLost
 
 log = logging.getLogger("robots.process")
 
@@ -116,19 +117,52 @@ async def _serve(
     options: Mapping[str, Any],
     ready: Callable[[], None] | None,
 ) -> None:
-    hw = await backend.connect(node, node.name, spec, **options)
-    if hw.radio is not None:
-        node.radio.locator = hw.radio  # ground truth, for the range-limited broadcast only
-    for proc_name, fn in backend.procedures(hw).items():
-        node.export(fn, proc_name)
-    robot: Robot[H] = Robot(node.name, hw, node, kind)
-    host.robot = robot
-    host.ready.set()
-    log.info("%s (%s) ready with programs %s", node.name, kind, sorted(host.programs))
-    if ready:
-        ready()
+    robot: Robot[H] | None = None
+    while True:
+        hw = await _connect(node, backend, spec, options)
+        if hw.radio is not None:
+            node.radio.locator = hw.radio  # ground truth, for the range-limited broadcast only
+        procedures = backend.procedures(hw)
+        for proc_name, fn in procedures.items():
+            node.export(fn, proc_name)
+        if robot is None:
+            robot = Robot(node.name, hw, node, kind)
+            host.robot = robot
+            host.ready.set()
+            log.info("%s (%s) ready with programs %s", node.name, kind, sorted(host.programs))
+            if ready:
+                ready()
+        else:
+            robot.hw = hw  # programs started from now on drive the new body
+            where = hw.radio.position() if hw.radio is not None else None
+            at = f"({where[0]:.2f}, {where[1]:.2f})" if where is not None else "a place unknown"
+            log.warning("%s: back in the world; its body is at %s", node.name, at)
+        try:
+            await _idle(hw)
+        except HardwareLost as exc:
+            log.warning("%s: %s; waiting for it to come back", node.name, exc)
+            host.fail_all(exc)  # the runs under way end with it (their finally blocks run)
+
+
+async def _connect(
+    node: Node, backend: HardwareBackend[H], spec: Mapping[str, Any], options: Mapping[str, Any]
+) -> H:
+    """Connect to the hardware, waiting (and saying so, once a minute) while it is away."""
+    waited = 0.0
+    while True:
+        try:
+            return await backend.connect(node, node.name, spec, **options)
+        except HardwareLost as exc:
+            if waited % 60.0 == 0.0:
+                log.warning("%s: waiting for the hardware: %s", node.name, exc)
+            await asyncio.sleep(1.0)
+            waited += 1.0
+
+
+async def _idle(hw: BaseHardware) -> None:
+    """Keep the clock going while idle (lock-step worlds wait for us), until cancelled."""
     try:
-        while True:  # keep the clock going while idle (lock-step worlds wait for us)
+        while True:
             # Let the tasks the last readings woke set their commands first, so that a
             # program's command is never a tick late because this loop ticked before it.
             for _ in range(3):

@@ -24,7 +24,8 @@ import time
 from collections.abc import Awaitable, Callable, Mapping
 from typing import Any
 
-from sim_hw._lockstep import Command, Readings
+from robots.hal import HardwareLost
+from sim_hw._lockstep import Command, Readings, RobotDropped
 
 log = logging.getLogger("sim_hw.caller")
 
@@ -34,6 +35,13 @@ FRAME_WAIT = 1.0
 """Seconds a robot waits for its tick's frame before it asks with a call."""
 FRAME_QUEUE = 64
 """Frames a robot keeps unread at most (one comes per tick)."""
+WORLD_GRACE = 1.5
+"""Seconds the world may be gone from the team (a missed lease on a loaded machine) before
+a robot takes it for lost."""
+
+
+class WorldLost(HardwareLost):
+    """The world process is gone: it left the team and did not come back within WORLD_GRACE."""
 
 
 def frame_topics(world: str) -> tuple[str, str]:
@@ -61,20 +69,30 @@ def world_caller(node: Any, world: str, call_timeout: float) -> Callable[..., Aw
     its calls (join, step) are idempotent, so wait for it to be back and ask again, until
     ``call_timeout`` seconds have passed.
     """
-    from mover import RobotLost, UnknownRobot
+    from mover import RemoteError, RobotLost, UnknownRobot
+
+    def lost() -> WorldLost:
+        return WorldLost(f"world {world!r} is gone (not in team {node.team_name!r})")
 
     async def call(procedure: str, *args: Any) -> Any:
         deadline = time.monotonic() + call_timeout
         while True:
-            left = deadline - time.monotonic()
             if world not in node.team:
-                await node.team.wait_for([world], timeout=max(left, 0.1))
+                try:
+                    await node.team.wait_for([world], timeout=WORLD_GRACE)
+                except TimeoutError:
+                    raise lost() from None
+            left = deadline - time.monotonic()
             try:
                 return await node.call(world, procedure, *args, timeout=max(left, 0.1))
             except (RobotLost, UnknownRobot):
                 if time.monotonic() >= deadline:
-                    raise
+                    raise lost() from None
                 await asyncio.sleep(0.05)
+            except RemoteError as exc:
+                if exc.remote_type == "RobotDropped":  # the world no longer has our body
+                    raise RobotDropped(exc.message) from None
+                raise
 
     return call
 

@@ -36,6 +36,8 @@ import time
 from collections.abc import Callable, Collection, Mapping
 from typing import Any, Generic, Protocol, TypeVar
 
+from robots.hal import HardwareLost
+
 log = logging.getLogger("sim_hw.lockstep")
 
 Command = Mapping[str, Any]
@@ -44,7 +46,7 @@ Readings = Any
 """A robot's readings after a tick, as the world defines them (opaque to the door)."""
 
 
-class RobotDropped(LookupError):
+class RobotDropped(HardwareLost, LookupError):
     """The robot is not (or no longer) in the world: it left, or it was dropped for silence."""
 
 
