@@ -6,7 +6,14 @@ grid world, and prints the paper's Tables 1–3 and the Figure 9 comparison besi
 * Table 1 — Setup 1: 40×40, 30 % obstacles, 20 resources × 1000 units, q_max 100, 5…160 agents;
 * Table 2 — Setup 2: 20×20, 5 %, 2 resources × 1000; 1…8 agents; projected V_ref/n vs measured;
 * Table 3 — Setup 3: 12×12…200×200, 5 %, 20 resources × 2000, 50 agents; ratio R;
-* Figure 9 ("ants") — c-marking vs ants in Setup 3.
+* Figure 9 ("ants") — c-marking vs ants in Setup 3;
+* "model" — how consistent the three tables are: T = a·D + b·TB fitted to each (D: time for
+  exploring agents to find every source; TB: the transport lower bound), the paper's and ours.
+
+The c-marking reading is the default of ``CMarkingAgent`` unless asked otherwise:
+``--trail-colours per-trail`` (one colour per trail), ``--climb-any`` (the letter's climb),
+``--colour-on-move``, ``--forget-at-base``, ``--literal``. ``--agent-seeds K`` runs each
+environment with K agent seeds, the standard error then taken over environments.
 
 Time is the paper's (section 5.1): iterations until every resource location is exhausted, one
 iteration being every agent acting once. The base is in the centre and every agent starts there.
