@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from mover import PROGRESS_TOPIC, Node, NodeConfig, Team, free_port, launch
-from mover.cli import UsageError
+from mover.cli import UsageError, positive
 from sim_hw import STATE_TOPIC, WorldFileError, load_world
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -41,7 +41,7 @@ def register(sub: Any) -> None:
     p.add_argument("--args", default="{}", metavar="JSON", help="the program's arguments")
     p.add_argument("--out", default="out/demo", help="directory for the recording and PNG")
     p.add_argument("--seed", type=int, default=1, help="seed of the world's sensor noise")
-    p.add_argument("--timeout", type=float, default=120.0, help="wall seconds before giving up")
+    p.add_argument("--timeout", type=positive, default=120.0, help="wall seconds before giving up")
     p.set_defaults(func=run)
 
 

@@ -17,6 +17,7 @@ import sys
 from collections.abc import Sequence
 from importlib.metadata import entry_points
 
+from ._exceptions import ConfigError
 from .cli import UsageError, add_log_arguments, setup_logging
 
 __all__ = ["UsageError", "build_parser", "main"]  # UsageError: its old home, kept for imports
@@ -46,7 +47,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         setup_logging(args)
         code = args.func(args)
-    except UsageError as exc:
+    except (UsageError, ConfigError) as exc:  # a setting is wrong: one line, no traceback
         print(f"mover {args.verb}: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

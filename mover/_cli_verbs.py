@@ -14,9 +14,9 @@ import sys
 from typing import TYPE_CHECKING, Any
 
 from ._config import NodeConfig, Team
-from ._exceptions import CallError
+from ._exceptions import CallError, WireError
 from ._keys import check_name
-from .cli import UsageError, add_team_arguments, team_from_args
+from .cli import UsageError, add_team_arguments, member_name, positive, team_from_args
 
 if TYPE_CHECKING:
     Sub = argparse._SubParsersAction[argparse.ArgumentParser]
@@ -100,7 +100,7 @@ def register_call(sub: Sub) -> None:
     p.add_argument("procedure")
     p.add_argument("args", nargs="*", metavar="JSON", help="positional arguments, each JSON")
     p.add_argument("--kwargs", metavar="JSON", help="keyword arguments as a JSON object")
-    p.add_argument("--timeout", type=float, default=10.0, help="seconds (default 10)")
+    p.add_argument("--timeout", type=positive, default=10.0, help="seconds (default 10)")
     _team_options(p)
     p.set_defaults(func=run_call)
 
@@ -154,7 +154,7 @@ async def _call(
             result = await node.call(
                 args.robot, args.procedure, *positional, timeout=args.timeout, **kwargs
             )
-        except CallError as exc:
+        except (CallError, WireError) as exc:  # WireError: an argument msgpack cannot carry
             print(f"mover call: {type(exc).__name__}: {exc}", file=sys.stderr)
             return 1
     print(json.dumps(result, default=_plain))
@@ -188,7 +188,10 @@ def run_keygen(args: argparse.Namespace) -> int:
     if args.out:
         import os
 
-        fd = os.open(args.out, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+        try:
+            fd = os.open(args.out, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+        except OSError as exc:
+            raise UsageError(f"cannot write {args.out}: {exc.strerror or exc}") from None
         with os.fdopen(fd, "w") as f:
             f.write(team.key.hex() + "\n")
         print(f"export MOVER_TEAM={team.name} MOVER_TEAM_KEY_FILE={args.out}")
@@ -219,7 +222,7 @@ def register_run(sub: Sub) -> None:
         "--args", metavar="JSON", default="{}", help="the program's arguments as a JSON object"
     )
     p.add_argument("--detach", action="store_true", help="exit once the run has started")
-    p.add_argument("--run-id", help="name of the run (default: PROGRAM-<random>)")
+    p.add_argument("--run-id", type=member_name, help="name of the run (default: PROGRAM-<random>)")
     _team_options(p)
     p.set_defaults(func=run_run)
 

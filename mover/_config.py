@@ -23,6 +23,7 @@ from typing import Any
 
 import zenoh
 
+from ._exceptions import ConfigError
 from ._keys import check_name
 
 MIN_KEY_BYTES = 16
@@ -38,7 +39,7 @@ class Team:
     def __post_init__(self) -> None:
         check_name("team", self.name)
         if not isinstance(self.key, bytes) or len(self.key) < MIN_KEY_BYTES:
-            raise ValueError(f"a team key must be at least {MIN_KEY_BYTES} bytes")
+            raise ConfigError(f"a team key must be at least {MIN_KEY_BYTES} bytes")
 
     @classmethod
     def generate(cls, name: str) -> Team:
@@ -50,22 +51,22 @@ class Team:
         """The team named by ``MOVER_TEAM`` (or ``name``) with its key from the environment."""
         name = name or os.environ.get("MOVER_TEAM")
         if not name:
-            raise ValueError("no team: pass --team or set MOVER_TEAM")
+            raise ConfigError("no team: pass --team or set MOVER_TEAM")
         hexkey = os.environ.get("MOVER_TEAM_KEY")
         path = os.environ.get("MOVER_TEAM_KEY_FILE")
         if hexkey is None and path:
             try:
                 hexkey = Path(path).read_text().strip()
             except OSError as exc:
-                raise ValueError(f"cannot read MOVER_TEAM_KEY_FILE {path!r}: {exc}") from exc
+                raise ConfigError(f"cannot read MOVER_TEAM_KEY_FILE {path!r}: {exc}") from exc
         if not hexkey:
-            raise ValueError(
+            raise ConfigError(
                 f"no key for team {name!r}: set MOVER_TEAM_KEY (hex) or MOVER_TEAM_KEY_FILE"
             )
         try:
             key = bytes.fromhex(hexkey)
         except ValueError as exc:
-            raise ValueError("MOVER_TEAM_KEY is not a hex string") from exc
+            raise ConfigError("MOVER_TEAM_KEY is not a hex string") from exc
         return cls(name, key)
 
     def env(self) -> dict[str, str]:
@@ -122,7 +123,7 @@ class NodeConfig:
     def to_zenoh(self) -> zenoh.Config:
         """The zenoh configuration."""
         if self.mode not in ("peer", "client", "router"):
-            raise ValueError(f"bad zenoh mode {self.mode!r}: use peer, client or router")
+            raise ConfigError(f"bad zenoh mode {self.mode!r}: use peer, client or router")
         conf = zenoh.Config()
         settings: dict[str, Any] = {
             "mode": self.mode,
@@ -139,7 +140,7 @@ class NodeConfig:
             try:
                 conf.insert_json5(key, json.dumps(value))
             except Exception as exc:
-                raise ValueError(f"bad zenoh setting {key} = {value!r}: {exc}") from exc
+                raise ConfigError(f"bad zenoh setting {key} = {value!r}: {exc}") from exc
         return conf
 
 
@@ -147,9 +148,9 @@ def _read_overrides(path: str) -> dict[str, Any]:
     try:
         data = json.loads(Path(path).read_text())
     except (OSError, ValueError) as exc:
-        raise ValueError(f"cannot read zenoh settings {path!r}: {exc}") from exc
+        raise ConfigError(f"cannot read zenoh settings {path!r}: {exc}") from exc
     if not isinstance(data, dict):
-        raise ValueError(f"{path}: expected an object of 'path/to/key': value settings")
+        raise ConfigError(f"{path}: expected an object of 'path/to/key': value settings")
     return data
 
 

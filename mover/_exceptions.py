@@ -17,6 +17,7 @@
     │       └── UnknownRobot       no team member of that name answers
     ├── MemberLost                 a member of a collective step left before it finished
     ├── NameTaken                  a live member already holds the name a node would take
+    ├── ConfigError                a team or transport setting is wrong (also a ValueError)
     └── NodeClosed                 the node was closed while the operation was pending
 
 Errors cross processes as data (type name and message), never as pickled objects.
@@ -101,6 +102,10 @@ class MemberLost(MoverError):
     def __init__(self, message: str, *, members: frozenset[str] = frozenset()) -> None:
         super().__init__(message)
         self.members = members
+
+
+class ConfigError(MoverError, ValueError):
+    """A team or transport setting (from the environment, a flag or a file) is wrong."""
 
 
 class NameTaken(MoverError):

@@ -16,6 +16,7 @@ coordinator: it may exit once the run has started, and the run goes on.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import inspect
 import logging
 from collections.abc import Callable, Mapping
@@ -103,6 +104,7 @@ class ProgramHost:
         task = asyncio.get_running_loop().create_task(
             self._run(fn, team, positional, kwargs, members)
         )
+        task.add_done_callback(_retrieved)  # its outcome is asked for by mover.outcome, if at all
         self.runs[run] = _Run(program, task, team)
         log.info("%s: started %s as run %s among %s", self.node.name, program, run, members)
 
@@ -126,9 +128,11 @@ class ProgramHost:
             log.warning(
                 "%s: run %s failed: %s: %s", self.node.name, team.run, type(exc).__name__, exc
             )
-            await team.report("failed", error=f"{type(exc).__name__}: {exc}")
+            with contextlib.suppress(MoverError):  # the node may be closing under it
+                await team.report("failed", error=f"{type(exc).__name__}: {exc}")
             raise
-        await team.report("done")
+        with contextlib.suppress(MoverError):
+            await team.report("done")
         return result
 
     async def outcome(self, run: str) -> dict[str, Any]:
@@ -155,6 +159,13 @@ class ProgramHost:
             if not entry.task.done():
                 entry.failed = reason
                 entry.task.cancel()
+
+    async def aclose(self) -> None:
+        """End every run under way here (their ``finally`` blocks run) and wait for them."""
+        tasks = [entry.task for entry in self.runs.values() if not entry.task.done()]
+        for task in tasks:
+            task.cancel()
+        await asyncio.gather(*tasks, return_exceptions=True)
 
     def installed(self) -> dict[str, str]:
         """The installed programs and their arguments."""
@@ -207,3 +218,8 @@ async def launch(
 
 def _metrics(team: TaskTeam) -> list[dict[str, Any]]:
     return [{"step": m.step, "kind": m.kind, "messages": m.messages} for m in team.metrics]
+
+
+def _retrieved(task: asyncio.Task[Any]) -> None:
+    if not task.cancelled():
+        task.exception()  # retrieved: a failed run nobody asked about is not an error at exit

@@ -22,15 +22,38 @@ import logging
 import os
 
 from ._config import NodeConfig, Team
+from ._keys import check_name
 
 __all__ = [
     "LOG_LEVEL_ENV",
     "UsageError",
     "add_log_arguments",
     "add_team_arguments",
+    "member_name",
+    "positive",
     "setup_logging",
     "team_from_args",
 ]
+
+
+def positive(text: str) -> float:
+    """An argparse type: a finite number above zero (seconds, speeds), else a one-line error."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not 0 < value < float("inf"):
+        raise argparse.ArgumentTypeError(f"must be a finite number above 0, got {text}")
+    return value
+
+
+def member_name(text: str) -> str:
+    """An argparse type: a valid member (robot, world, tool) name, else a one-line error."""
+    try:
+        return check_name("member", text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
 
 #: The environment variable that sets the log level of a process given no logging option.
 LOG_LEVEL_ENV = "MOVER_LOG_LEVEL"

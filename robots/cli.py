@@ -18,7 +18,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from mover import NameTaken
+from mover import ConfigError, NameTaken
 from mover.cli import (
     UsageError,
     add_log_arguments,
@@ -118,9 +118,12 @@ def run(args: argparse.Namespace) -> int:
     spec = dict(entry.get("spec", {}))
     if args.spec:
         try:
-            spec.update(json.loads(args.spec))
-        except json.JSONDecodeError as exc:
-            raise UsageError(f"--spec is not JSON: {exc.msg}") from None
+            given = json.loads(args.spec)
+        except (json.JSONDecodeError, RecursionError) as exc:
+            raise UsageError(f"--spec is not JSON: {getattr(exc, 'msg', exc)}") from None
+        if not isinstance(given, dict):
+            raise UsageError(f"--spec must be a JSON object, got {type(given).__name__}")
+        spec.update(given)
     team, config = team_from_args(args)
     kind = args.kind or entry.get("kind", "robot")
     options = backend_options(args.world, args.option or ())
@@ -151,7 +154,7 @@ def main() -> int:
     try:
         setup_logging(args, default="INFO")
         return run(args)
-    except UsageError as exc:
+    except (UsageError, ConfigError) as exc:
         print(f"robots: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

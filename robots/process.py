@@ -98,14 +98,17 @@ async def run_robot(
         # Export first, so that a launcher that sees this member can start programs at once;
         # they wait until the hardware is up.
         host = ProgramHost(node, programs, robot=None, ready=backend is None)
-        if backend is None:  # a workstation: a member without a body
-            workstation: Robot[None] = Robot(name, None, node, kind)
-            host.robot = workstation
-            if ready:
-                ready()
-            await asyncio.Event().wait()
-            return
-        await _serve(node, host, backend, kind, spec or {}, options or {}, ready)
+        try:
+            if backend is None:  # a workstation: a member without a body
+                workstation: Robot[None] = Robot(name, None, node, kind)
+                host.robot = workstation
+                if ready:
+                    ready()
+                await asyncio.Event().wait()
+                return
+            await _serve(node, host, backend, kind, spec or {}, options or {}, ready)
+        finally:
+            await host.aclose()  # runs under way end before the node does
 
 
 async def _serve(

@@ -17,6 +17,7 @@ from collections.abc import Callable
 from typing import Any
 
 from mover import MoverError, pack
+from mover.cli import member_name, positive
 from sim_hw._caller import frame_topics
 from sim_hw._lockstep import LockstepDoor, RobotDropped
 
@@ -29,17 +30,6 @@ STATE_TOPIC = "world/state"
 """The team-wide topic on which a world process streams its snapshots."""
 
 
-def positive(text: str) -> float:
-    """An argparse type: a number above zero."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"must be positive, got {text}")
-    return value
-
-
 def count(text: str) -> int:
     """An argparse type: a whole number, zero or more."""
     try:
@@ -48,6 +38,17 @@ def count(text: str) -> int:
         raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
     if value < 0:
         raise argparse.ArgumentTypeError(f"must be >= 0, got {text}")
+    return value
+
+
+def rate(text: str) -> float:
+    """An argparse type: a number, zero or more."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not value >= 0 or value == float("inf"):
+        raise argparse.ArgumentTypeError(f"must be a finite number >= 0, got {text}")
     return value
 
 
@@ -71,7 +72,12 @@ def add_world_arguments(
         help=f"lock-step: drop a robot silent for S wall seconds in a {tick} (default {timeout:g})",
     )
     p.add_argument("--seed", type=int, default=0, help=f"seed of {seed}")
-    p.add_argument("--name", default=name, help=f"the world process's node name (default {name})")
+    p.add_argument(
+        "--name",
+        type=member_name,
+        default=name,
+        help=f"the world process's node name (default {name})",
+    )
     p.add_argument(
         "--quit-when-empty",
         action="store_true",

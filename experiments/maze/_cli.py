@@ -82,6 +82,8 @@ def settings(args: argparse.Namespace) -> MazeSettings:
     :class:`~mover.cli.UsageError` naming what is wrong."""
     if args.runs < 1 or min(args.agents) < 1 or args.exchanges < 1:
         raise UsageError("--runs, --agents and --exchanges must be positive")
+    if not 4 <= args.size <= 1000:
+        raise UsageError(f"--size must be from 4 to 1000, got {args.size}")
     maze = None
     if args.maze is not None:
         try:

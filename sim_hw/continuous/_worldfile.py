@@ -38,6 +38,16 @@ from ._spec import (
 _T = TypeVar("_T")
 
 
+MAX_SIDE = 1000.0
+"""The longest side of an arena, in metres (a larger one is refused where it is read)."""
+MAX_GENERATED = 10_000
+"""The most obstacles a generator may place."""
+MAX_RAYS = 360
+"""The most rays a sonar may have."""
+MAX_FILE_BYTES = 16 * 2**20
+"""The largest world file read."""
+
+
 class WorldFileError(ValueError):
     """A world file (or a robot's settings) is wrong: ``source``, ``field`` and ``problem``."""
 
@@ -89,7 +99,9 @@ class _Table:
             raise self.fail(key, f"must be {'>' if strict else '>='} {low:g}, got {value!r}")
         return float(value)
 
-    def integer(self, key: str, default: int | None = None, *, low: int = 0) -> int:
+    def integer(
+        self, key: str, default: int | None = None, *, low: int = 0, high: int | None = None
+    ) -> int:
         value = self.get(key)
         if value is None:
             if default is None:
@@ -99,6 +111,8 @@ class _Table:
             raise self.fail(key, f"must be an integer, got {value!r}")
         if value < low:
             raise self.fail(key, f"must be >= {low}, got {value!r}")
+        if high is not None and value > high:
+            raise self.fail(key, f"must be at most {high}, got {value!r}")
         return value
 
     def string(self, key: str, default: str | None = None) -> str:
@@ -120,7 +134,13 @@ class _Table:
         return value
 
     def vector(
-        self, key: str, n: int, default: tuple[float, ...] | None = None, *, positive: bool = False
+        self,
+        key: str,
+        n: int,
+        default: tuple[float, ...] | None = None,
+        *,
+        positive: bool = False,
+        high: float | None = None,
     ) -> Any:
         value = self.get(key)
         if value is None:
@@ -139,6 +159,8 @@ class _Table:
             raise self.fail(key, f"must be a list of {n} numbers, got {value!r}")
         if positive and any(v <= 0 for v in value):
             raise self.fail(key, f"must be positive, got {value!r}")
+        if high is not None and any(abs(v) > high for v in value):
+            raise self.fail(key, f"must be at most {high:g}, got {value!r}")
         return tuple(float(v) for v in value)
 
     def table(self, key: str) -> _Table | None:
@@ -215,7 +237,7 @@ def _device(
 
 def _sonar(t: _Table, base: SonarSpec) -> SonarSpec:
     return SonarSpec(
-        rays=t.integer("rays", base.rays, low=1),
+        rays=t.integer("rays", base.rays, low=1, high=MAX_RAYS),
         max_range=t.number("max_range", base.max_range),
         noise=t.number("noise", base.noise, strict=False),
     )
@@ -301,8 +323,8 @@ def _generated(t: _Table) -> WorldSpec:
     kind = t.string("kind")
     if kind == "random_obstacles":
         spec = random_obstacles(
-            size=t.vector("size", 2, (10.0, 10.0), positive=True),
-            count=t.integer("count", 20),
+            size=t.vector("size", 2, (10.0, 10.0), positive=True, high=MAX_SIDE),
+            count=t.integer("count", 20, high=MAX_GENERATED),
             rng=np.random.default_rng(t.integer("seed", 0)),
             min_size=t.number("min_size", 0.2),
             max_size=t.number("max_size", 0.8),
@@ -345,7 +367,7 @@ def parse_world(data: Any, source: str) -> WorldSpec:
     if w is not None:
         spec = replace(
             spec,
-            size=w.vector("size", 2, spec.size, positive=True),
+            size=w.vector("size", 2, spec.size, positive=True, high=MAX_SIDE),
             name=w.string("name", spec.name),
             cell=w.number("cell", spec.cell),
         )
@@ -440,6 +462,8 @@ def load_world(path: str | Path) -> WorldSpec:
     path = Path(path)
     source = str(path)
     try:
+        if path.stat().st_size > MAX_FILE_BYTES:
+            raise WorldFileError(source, "", f"is over {MAX_FILE_BYTES // 2**20} MiB")
         raw = path.read_bytes()
     except OSError as exc:
         raise WorldFileError(source, "", f"cannot read: {exc.strerror or exc}") from None
@@ -448,6 +472,8 @@ def load_world(path: str | Path) -> WorldSpec:
             data = tomllib.loads(raw.decode("utf-8"))
         except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
             raise WorldFileError(source, "", f"not valid TOML: {exc}") from None
+        except RecursionError:
+            raise WorldFileError(source, "", "not valid TOML: nested too deeply") from None
     elif path.suffix == ".json":
         try:
             data = json.loads(raw)
@@ -455,6 +481,8 @@ def load_world(path: str | Path) -> WorldSpec:
             raise WorldFileError(
                 source, f"line {exc.lineno}", f"not valid JSON: {exc.msg} (column {exc.colno})"
             ) from None
+        except RecursionError:
+            raise WorldFileError(source, "", "not valid JSON: nested too deeply") from None
     else:
         raise WorldFileError(source, "", "must end in .toml or .json")
     return parse_world(data, source)

@@ -15,8 +15,8 @@ from pathlib import Path
 from typing import Any
 
 from mover import NameTaken
-from mover.cli import UsageError
-from sim_hw._process import add_world_arguments, positive
+from mover.cli import UsageError, positive
+from sim_hw._process import add_world_arguments, rate
 
 log = logging.getLogger("sim_hw.continuous.cli")
 
@@ -40,7 +40,7 @@ def register_world(sub: Any) -> None:
     p.add_argument("--until", type=positive, metavar="T", help="stop at simulated time T")
     p.add_argument(
         "--state-rate",
-        type=float,
+        type=rate,
         default=2.0,
         metavar="HZ",
         help="snapshots per simulated second on world/state (0: none)",
