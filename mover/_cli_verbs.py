@@ -308,6 +308,8 @@ async def _run(
         if "error" in outcome:
             failed += 1
             print(f"{member}: FAILED {outcome['error']}")
+            if outcome.get("traceback"):  # a bug in the program: where it happened
+                print("  " + outcome["traceback"].rstrip().replace("\n", "\n  "))
         else:
             print(f"{member}: {json.dumps(outcome.get('result'), default=_plain)}")
     return 1 if failed else 0

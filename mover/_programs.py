@@ -19,6 +19,7 @@ import asyncio
 import contextlib
 import inspect
 import logging
+import traceback
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -125,8 +126,15 @@ class ProgramHost:
         except asyncio.CancelledError:
             raise
         except Exception as exc:
+            # A fault the run could expect (the hardware went away, a member was lost) is one
+            # line; a bug in the program keeps its traceback, here and in the outcome.
             log.warning(
-                "%s: run %s failed: %s: %s", self.node.name, team.run, type(exc).__name__, exc
+                "%s: run %s failed: %s: %s",
+                self.node.name,
+                team.run,
+                type(exc).__name__,
+                exc,
+                exc_info=None if _expected(exc) else exc,
             )
             with contextlib.suppress(MoverError):  # the node may be closing under it
                 await team.report("failed", error=f"{type(exc).__name__}: {exc}")
@@ -149,7 +157,10 @@ class ProgramHost:
                 return {"error": error, "steps": _metrics(entry.team)}
             raise
         except Exception as exc:
-            return {"error": f"{type(exc).__name__}: {exc}", "steps": _metrics(entry.team)}
+            outcome = {"error": f"{type(exc).__name__}: {exc}", "steps": _metrics(entry.team)}
+            if not _expected(exc):
+                outcome["traceback"] = "".join(traceback.format_exception(exc))
+            return outcome
         return {"result": result, "steps": _metrics(entry.team)}
 
     def fail_all(self, reason: BaseException) -> None:
@@ -218,6 +229,12 @@ async def launch(
 
 def _metrics(team: TaskTeam) -> list[dict[str, Any]]:
     return [{"step": m.step, "kind": m.kind, "messages": m.messages} for m in team.metrics]
+
+
+def _expected(exc: BaseException) -> bool:
+    """Whether a run's failure is a fault it could expect (mover's errors, or an exception
+    whose class says ``expected = True``, as a lost hardware's does), not a bug."""
+    return isinstance(exc, MoverError) or bool(getattr(exc, "expected", False))
 
 
 def _retrieved(task: asyncio.Task[Any]) -> None:

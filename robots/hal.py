@@ -80,6 +80,8 @@ class HardwareLost(Exception):
     connects again, and a program that was running fails with it.
     """
 
+    expected = True  # a fault to report in one line, not a bug (see mover's ProgramHost)
+
 
 @dataclass(frozen=True, slots=True)
 class PushResult:

@@ -84,7 +84,13 @@ async def or_outage(robot: None, team: RunTeam, hold: float) -> str:
     return str(outcome.winner)
 
 
+async def divide(robot: None, team: RunTeam, by: int) -> float:
+    """A program with a bug when ``by`` is 0."""
+    return 1 / by
+
+
 PROGRAMS = {
+    "divide": divide,
     "ties": ties,
     "cleanup": cleanup,
     "and_wait": and_wait,

@@ -141,3 +141,13 @@ async def test_an_outsider_cannot_start_a_program() -> None:
                 )
         with pytest.raises(Exception, match="no run 'evil'"):
             await node.call("a", "mover.outcome", "evil", timeout=5)
+
+
+async def test_a_program_error_carries_its_traceback_to_the_launcher() -> None:
+    async with cluster() as c, Node("launcher", c.team, kind="tool", config=c.seed) as node:
+        await start_team(c, node, ["a"])
+        outcomes = await launch(node, "divide", ["a"], {"by": 0}, run="bug")
+        outcome = outcomes["a"]
+        assert outcome["error"] == "ZeroDivisionError: division by zero"
+        assert "team_proc.py" in outcome["traceback"] and "in divide" in outcome["traceback"]
+        assert "return 1 / by" in outcome["traceback"]
