@@ -85,6 +85,16 @@ def add_world_arguments(
     )
 
 
+def ready_line(name: str, source: str, team: Any, config: Any) -> str:
+    """What a world process prints once it serves: where it is and how robots join it."""
+    where = ",".join(config.listen or config.connect)
+    join = f"MOVER_TEAM={team.name} MOVER_CONNECT={where}" if where else f"MOVER_TEAM={team.name}"
+    return (
+        f"READY {name}: serving {source} in team {team.name!r}; robots join with {join} "
+        f"and the team's key (MOVER_TEAM_KEY or MOVER_TEAM_KEY_FILE)"
+    )
+
+
 def serve(node: Any, door: LockstepDoor[Any], *, frames: bool = True) -> None:
     """Export ``door``'s three calls on ``node`` and drop the robots whose process left.
 

@@ -16,7 +16,7 @@ from typing import Any
 
 from mover import NameTaken
 from mover.cli import UsageError, positive
-from sim_hw._process import add_world_arguments, rate
+from sim_hw._process import add_world_arguments, rate, ready_line
 
 log = logging.getLogger("sim_hw.continuous.cli")
 
@@ -92,6 +92,9 @@ def run_world(args: argparse.Namespace) -> int:
                 quit_when_empty=args.quit_when_empty,
                 team=team,
                 config=config,
+                ready=lambda: print(
+                    ready_line(args.name, args.worldfile, team, config), flush=True
+                ),
             )
         )
     except NameTaken as exc:

@@ -183,7 +183,7 @@ def _write_snapshot(server: Any, where: Path) -> None:
 def run(args: argparse.Namespace) -> int:
     """Run a grid world process until interrupted (or --quit-when-empty)."""
     from mover import NodeConfig, Team
-    from sim_hw._process import run_world_process
+    from sim_hw._process import ready_line, run_world_process
 
     from ._server import serve_grid
 
@@ -236,7 +236,7 @@ def run(args: argparse.Namespace) -> int:
                 team=team,
                 config=config,
                 quit_when_empty=args.quit_when_empty,
-                ready=lambda: print("READY", args.name, flush=True),
+                ready=lambda: print(ready_line(args.name, args.file, team, config), flush=True),
             )
         )
     except KeyboardInterrupt:
