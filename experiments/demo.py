@@ -128,18 +128,24 @@ async def demo(s: DemoSettings) -> int:
             world = [sys.executable, "-m", "mover._cli", "world", str(s.world), "--lockstep"]
             world += ["--expect", str(len(robots)), "--seed", str(s.seed), "--timeout", "5"]
             world += ["--record", str(recording), "--state-rate", "5"]
-            procs.append(await _spawn(world, env))
+            world_log = s.out / "world.log"
+            world_proc = await _spawn(world, env, log=world_log)
+            procs.append(world_proc)
             for name in robots:
                 procs.append(await _spawn([sys.executable, "-m", "robots", "--name", name], env))
-            await node.team.wait_for(["world", *robots], timeout=60)
+            await _while_alive(world_proc, world_log, node.team.wait_for(["world", *robots], 60))
             print(
                 f"[{time.monotonic() - wall0:5.1f}s] world and {len(robots)} robot processes up",
                 flush=True,
             )
             watcher = asyncio.create_task(seen.watch(progress, states))
             try:
-                outcomes = await asyncio.wait_for(
-                    launch(node, s.program, robots, s.program_args, run="demo"), s.timeout
+                outcomes = await _while_alive(
+                    world_proc,
+                    world_log,
+                    asyncio.wait_for(
+                        launch(node, s.program, robots, s.program_args, run="demo"), s.timeout
+                    ),
                 )
             finally:
                 await asyncio.sleep(0.2)
@@ -147,6 +153,9 @@ async def demo(s: DemoSettings) -> int:
                 await asyncio.wait([watcher])  # ended; its cancellation is not ours to raise
     except TimeoutError:
         print(f"mover demo: no result within {s.timeout} s", file=sys.stderr)
+        return 1
+    except _WorldExited as exc:
+        print(f"mover demo: {exc}", file=sys.stderr)
         return 1
     finally:
         await _stop(procs)
@@ -168,10 +177,42 @@ async def demo(s: DemoSettings) -> int:
     return 0 if ok else 1
 
 
-async def _spawn(cmd: list[str], env: dict[str, str]) -> asyncio.subprocess.Process:
-    return await asyncio.create_subprocess_exec(
-        *cmd, env=env, stdin=asyncio.subprocess.PIPE, stdout=asyncio.subprocess.DEVNULL
-    )
+async def _spawn(
+    cmd: list[str], env: dict[str, str], *, log: Path | None = None
+) -> asyncio.subprocess.Process:
+    err = log.open("wb") if log is not None else None
+    try:
+        return await asyncio.create_subprocess_exec(
+            *cmd, env=env, stdin=asyncio.subprocess.PIPE, stdout=asyncio.subprocess.DEVNULL,
+            stderr=err,
+        )  # fmt: skip
+    finally:
+        if err is not None:
+            err.close()
+
+
+class _WorldExited(Exception):
+    """The world process ended before the demo did."""
+
+
+async def _while_alive(world: asyncio.subprocess.Process, log: Path, work: Any) -> Any:
+    """Await ``work`` unless the world process exits first: then say why, in its own words."""
+    task = asyncio.ensure_future(work)
+    ended = asyncio.ensure_future(world.wait())
+    try:
+        await asyncio.wait({task, ended}, return_when=asyncio.FIRST_COMPLETED)
+    finally:
+        ended.cancel()
+    if task.done():
+        return task.result()
+    task.cancel()
+    await asyncio.gather(task, return_exceptions=True)
+    text = await asyncio.to_thread(log.read_text, errors="replace")
+    lines = [line for line in text.splitlines() if line.strip()]
+    said = lines[-1] if lines else "nothing"
+    code = world.returncode or 0
+    how = f"was killed by signal {-code}" if code < 0 else f"exited with code {code}"
+    raise _WorldExited(f"the world process {how}; its last word: {said}")
 
 
 async def _stop(procs: list[asyncio.subprocess.Process]) -> None:

@@ -4,8 +4,13 @@ from __future__ import annotations
 
 import asyncio
 import os
+import signal
+import subprocess
 import sys
+import time
 from pathlib import Path
+
+import pytest
 
 from tests.helpers.procs import ROOT
 
@@ -55,3 +60,29 @@ async def test_search_and_rescue_with_three_robot_processes_moves_the_box(tmp_pa
     }
     assert len(winners) == 1  # every member agreed on the finder
     assert (tmp_path / "trajectories.png").stat().st_size > 1000
+
+
+@pytest.mark.slow
+async def test_the_demo_fails_fast_when_its_world_is_killed() -> None:
+    proc = await asyncio.create_subprocess_exec(
+        sys.executable, "-m", "mover", "demo", cwd=ROOT,
+        stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.STDOUT,
+    )  # fmt: skip
+    assert proc.stdout is not None
+    async with asyncio.timeout(60):
+        while b"processes up" not in await proc.stdout.readline():
+            pass
+    await asyncio.sleep(1.0)
+    worlds = subprocess.run(  # noqa: ASYNC221  (a moment's pgrep)
+        ["pgrep", "-P", str(proc.pid), "-f", "mover._cli world"], capture_output=True, text=True
+    )
+    assert worlds.stdout.split(), "no world process of the demo's found"
+    for pid in worlds.stdout.split():
+        os.kill(int(pid), signal.SIGKILL)
+    killed = time.monotonic()
+    rest = (await asyncio.wait_for(proc.stdout.read(), 30)).decode()
+    await proc.wait()
+    assert proc.returncode == 1
+    assert time.monotonic() - killed < 10
+    assert "the world process was killed by signal 9" in rest
+    assert "Traceback" not in rest
