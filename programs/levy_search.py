@@ -60,7 +60,8 @@ async def levy_search(
         return hw.clock.now()
 
     async with hw.clock.ticking():  # a lock-step world must not wait on an idle robot
-        start = max((await team.distributed_and(now)).values()) + START_LEAD * hw.clock.tick_period
+        latest = max((await team.distributed_and(now)).values())
+    start = latest + START_LEAD * hw.clock.tick_period
     while hw.clock.now() < start - 1e-9:
         await hw.clock.tick()
     start = hw.clock.now()
@@ -72,13 +73,16 @@ async def levy_search(
         latest = {m.sender: m for m in here.drain() if m.distance is not None}
         return [(m.distance, m.bearing or 0.0) for m in latest.values() if m.distance]
 
+    def record(target: str, t: float) -> None:  # the earliest report of a find counts
+        found[target] = min(t, found.get(target, t))
+
     def marked(target: str, t: float) -> None:
-        found.setdefault(target, t - start)
+        record(target, t - start)
         node.broadcast_nowait(FOUND, {"target": target, "t": t - start}, reliable=True)
 
     def over() -> bool:
         for m in heard.drain():
-            found.setdefault(str(m.data["target"]), float(m.data["t"]))
+            record(str(m.data["target"]), float(m.data["t"]))
         return len(found) >= targets or hw.clock.now() - start > max_time
 
     mine = await library.levy_search(robot, walk, neighbours, over, marked)

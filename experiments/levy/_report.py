@@ -63,12 +63,16 @@ def table(records: Records, key: str, title: str, setup: Setup) -> str:
 
 
 def saturation(records: Records, setup: Setup) -> str:
-    """Fig. 9's saturation: the speed-up T(1)/T(n) against the ideal n, and the team's
-    robot-seconds n·T(n) per method (constant if robots added work independently)."""
+    """Fig. 9's saturation: the speed-up n0 T(n0)/T(n) against the ideal n (n0 the fewest
+    robots run, normally 1), and the efficiency n0 T(n0)/(n T(n)) per method."""
     groups = _by(records, "robots")
     ns = sorted({r["robots"] for r in records})
     methods = [m for m in ORDER if any(r["method"] == m for r in records)]
-    out = ["\nsaturation (Fig. 9): speed-up T(1)/T(n) and efficiency T(1)/(n T(n))"]
+    n0 = min(ns)
+    out = [
+        f"\nsaturation (Fig. 9): speed-up {n0} T({n0})/T(n) and efficiency"
+        f" {n0} T({n0})/(n T(n)) (1 if robots added independent work)"
+    ]
     out.append(f"{'robots':>7} " + "".join(f"{m + ' speed-up, eff.':>24}" for m in methods))
     for n in ns:
         cells = []

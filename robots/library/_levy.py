@@ -133,6 +133,7 @@ def repulsion(neighbours: Sequence[Neighbour], k_rep: float, rho0: float) -> tup
     potential, which eq. 8-9 cite. The paper prints the two conditions the other way round (a
     force for ρ ≥ ρ0, none inside), which would repel only distant robots, pull (the factor
     is negative) and vanish where robots are close; this is the physically meaningful one.
+    (Eq. 8 also drops Khatib's square: eq. 9 is the gradient of U = ½ k_rep (1/ρ - 1/ρ0)².)
     """
     fx = fy = 0.0
     for rho, bearing in neighbours:

@@ -19,7 +19,7 @@ import pytest
 from experiments.levy import Setup, arena, run_world, world_data
 from mover import launch
 from sim_hw.continuous import TICK, WorldSpec, load_world
-from tests.helpers.procs import cluster
+from tests.helpers.procs import ROOT, cluster
 
 SETUP = replace(Setup(), size=8.0, obstacles=3, max_time=900.0)
 ROBOTS, TARGETS = 3, 2
@@ -32,16 +32,18 @@ def small_world(tmp_path: Path, run: int) -> tuple[Path, WorldSpec]:
     return path, load_world(path)
 
 
-async def distributed(path: Path, method: str, seed: int) -> tuple[dict[str, Any], float]:
+async def distributed(
+    path: Path, method: str, seed: int, robots: int = ROBOTS, targets: int = TARGETS
+) -> tuple[dict[str, Any], float]:
     """One run of the program on a fresh world and robot processes; results and wall s."""
-    names = [f"r{i:02d}" for i in range(ROBOTS)]
+    names = [f"r{i:02d}" for i in range(robots)]
     async with cluster() as c, c.launcher() as node:
-        await c.world(str(path), expect=ROBOTS)
+        await c.world(str(path), expect=robots)
         await c.robots(*names)
-        await node.team.wait_for(["world", *names], timeout=30)
-        args = {"method": method, "targets": TARGETS, "seed": seed, "max_time": SETUP.max_time}
+        await node.team.wait_for(["world", *names], timeout=60)
+        args = {"method": method, "targets": targets, "seed": seed, "max_time": SETUP.max_time}
         t0 = time.monotonic()
-        outcomes = await asyncio.wait_for(launch(node, "levy_search", names, args, run="levy"), 240)
+        outcomes = await asyncio.wait_for(launch(node, "levy_search", names, args, run="levy"), 500)
         took = time.monotonic() - t0
     results = {n: o.get("result") for n, o in outcomes.items()}
     assert all(r is not None for r in results.values()), outcomes
@@ -99,3 +101,24 @@ async def test_l_plus_p_agrees_with_the_in_process_runs_over_10_seeds(tmp_path: 
     assert abs(b.mean() - a.mean()) < 3 * se + 1.0
     # the paired runs share arena, starts and walks: they should mostly stay close
     assert float(np.median(np.abs(a - b))) < 0.5 * float(np.median(a))
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(900)
+async def test_ten_robot_processes_search_the_papers_arena() -> None:
+    path = ROOT / "worlds" / "levy_search.json"  # 20 x 20 m, 12 obstacles, 8 targets
+    spec = load_world(path)
+    setup = Setup()
+    for method in ("L", "L+P"):
+        reference = run_world(spec, method, setup, [11])
+        results, took = await distributed(path, method, 11, robots=10, targets=8)
+        times = sorted({r["time"] for r in results.values()})
+        sim = reference["time"]
+        print(
+            f"\n{method}, 10 robot processes, 8 targets: in-process {sim:.1f} s, distributed "
+            f"{[round(t, 1) for t in times]} s in {took:.1f} s wall ({10 * times[-1] / took:.0f}"
+            " simulated robot-s per wall s)"
+        )
+        assert len(times) == 1 and times[0] is not None
+        if method == "L":
+            assert ticks(times[0]) == ticks(sim)
