@@ -23,6 +23,8 @@ from dataclasses import dataclass
 from typing import Literal, Protocol, runtime_checkable
 
 __all__ = [
+    "MARK",
+    "MARKED",
     "Bumper",
     "BumperSide",
     "Camera",
@@ -71,6 +73,13 @@ class FloorCell:
 
     value: int
     colour: str
+
+
+#: How a robot talks to a passive target (its LED) and how a marked one looks (its status).
+MARK = "mark:"
+"""LED prefix of a robot's message to a target: ``mark:<id>`` marks target ``<id>``."""
+MARKED = "marked"
+"""The status a marked target shows to cameras (its "repelling signal")."""
 
 
 class HardwareLost(Exception):

@@ -18,6 +18,8 @@ function or small class of readings → command, testable without a world.
 * training (section 5) — :func:`snapshot`.
 """
 
+from robots.hal import MARK, MARKED
+
 from ._goto import (
     approach,
     detour,
@@ -31,8 +33,6 @@ from ._goto import (
     turn_to,
 )
 from ._levy import (
-    MARK,
-    MARKED,
     METHODS,
     LevyCommand,
     LevyParams,

@@ -31,15 +31,11 @@ from typing import Protocol
 import numpy as np
 
 from robots._robot import Robot
-from robots.hal import Hardware, Sighting
+from robots.hal import MARK, MARKED, Hardware, Sighting
 
 from ._geometry import clip, wrap
 from ._levy_steps import FixedSteps, LevySteps
 
-MARK = "mark:"
-"""LED prefix of a robot's message to a target: ``mark:<id>`` marks target ``<id>``."""
-MARKED = "marked"
-"""The status a marked target shows to cameras (its "repelling signal")."""
 METHODS = ("FL", "L", "L+P")
 """The paper's walks: fixed-length (FL), Lévy (L), Lévy with potential field and signatures
 (L+P)."""

@@ -19,7 +19,7 @@ import numpy as np
 import pymunk
 from pymunk._chipmunk import lib as _lib
 
-from robots.library import MARK, MARKED
+from robots.hal import MARK, MARKED
 
 from . import _bodies, _devices
 from ._contract import Command, Readings
