@@ -12,7 +12,7 @@ code, for each row of a table:
   wavefront): every unit carried home along a shortest path, the last trip ending at the
   source, the work shared evenly.
 
-Then ``T = a·D + b·TB`` is fitted by least squares on relative error to each table's times
+Then ``T = a·D + b·TB`` is fitted (least squares on relative error, a, b ≥ 0) to each table's times
 (the paper's, or ours with some reading). ``b`` is the overhead per trip over a shortest path:
 how many times the bare transport the team spends on it, trails included. Geometry and agent
 counts are in D and TB; what is left in ``b`` is the algorithm, which should not differ between
@@ -131,14 +131,28 @@ def fit(rows: Sequence[ModelRow], times: Mapping[int, float]) -> Fit | None:
 
 
 def fit_points(points: Sequence[tuple[float, float, float]]) -> Fit | None:
-    """:func:`fit` over (D, TB, T) triples, from one table or pooled over several."""
+    """:func:`fit` over (D, TB, T) triples, from one table or pooled over several.
+
+    Non-negative least squares: a time is not shortened by a longer search or a longer
+    transport, and where D and TB scale alike (Setup 2: both ∝ 1/agents) an unconstrained fit
+    trades a negative a for a larger b. With two unknowns, the constrained optimum is the
+    unconstrained one if both are non-negative, else the better of the one-term fits.
+    """
     if len(points) < 2:
         return None
     t = np.array([p[2] for p in points])
     x = np.array([[p[0], p[1]] for p in points]) / t[:, None]
-    (a, b), *_ = np.linalg.lstsq(x, np.ones(len(points)), rcond=None)
-    rms = float(np.sqrt(np.mean((x @ np.array([a, b]) - 1) ** 2)))
-    return Fit(float(a), float(b), rms)
+    ones = np.ones(len(points))
+    coef, *_ = np.linalg.lstsq(x, ones, rcond=None)
+    if (coef < 0).any():
+        one_term = []
+        for col in (0, 1):
+            c = np.zeros(2)
+            c[col] = max(0.0, float(x[:, col] @ ones / (x[:, col] @ x[:, col])))
+            one_term.append(c)
+        coef = min(one_term, key=lambda c: float(np.sum((x @ c - 1) ** 2)))
+    rms = float(np.sqrt(np.mean((x @ coef - 1) ** 2)))
+    return Fit(float(coef[0]), float(coef[1]), rms)
 
 
 def pooled(

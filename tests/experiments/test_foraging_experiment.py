@@ -141,6 +141,8 @@ def test_model_fit_recovers_a_and_b_and_discovery_is_seeded() -> None:
             ((1, 100, 900), (2, 60, 450), (4, 40, 225))]  # fmt: skip
     f = fit(rows, {r.key: 0.5 * r.d.mean + 3.0 * r.tb_mean for r in rows})
     assert f is not None and abs(f.a - 0.5) < 1e-9 and abs(f.b - 3.0) < 1e-9 and f.rms < 1e-12
+    g = fit(rows, {r.key: 3.0 * r.tb_mean - 0.1 * r.d.mean for r in rows})
+    assert g is not None and g.a == 0.0 and g.b > 0  # a held at zero, not negative
     one, tb = discovery(fx.SETUP2, 2, (1, 2, 0), (1, 2, 0, 2, 2), 100_000)
     assert one.finished and one.iterations > 0 and tb > 0
     assert discovery(fx.SETUP2, 2, (1, 2, 0), (1, 2, 0, 2, 2), 100_000) == (one, tb)
