@@ -19,6 +19,7 @@ import pytest_asyncio
 
 from mover import Node
 from tests.helpers.procs import Cluster, cluster
+from tests.mover.test_processes import _raw_get
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")
 
@@ -156,15 +157,3 @@ async def test_a_member_whose_clock_is_an_hour_off_works(
         while {"from": name} not in await _heard(node, "r1", "news"):
             await node.call(name, "send", "news", {"from": name}, None, timeout=5)
             await asyncio.sleep(0.1)
-
-
-async def _raw_get(node: Node, key: str, frame: bytes) -> bytes:
-    """A raw zenoh get (no mover client), returning the first reply's bytes."""
-
-    def get() -> bytes:
-        for reply in node.zenoh_session.get(key, payload=frame, timeout=5.0):
-            if reply.ok is not None:
-                return bytes(reply.ok.payload.to_bytes())
-        return b""
-
-    return await asyncio.to_thread(get)
