@@ -22,7 +22,7 @@ import logging
 import os
 
 from ._config import NodeConfig, Team
-from ._keys import check_name
+from ._keys import check_name as _check_name
 
 __all__ = [
     "LOG_LEVEL_ENV",
@@ -50,7 +50,7 @@ def positive(text: str) -> float:
 def member_name(text: str) -> str:
     """An argparse type: a valid member (robot, world, tool) name, else a one-line error."""
     try:
-        return check_name("member", text)
+        return _check_name("member", text)
     except ValueError as exc:
         raise argparse.ArgumentTypeError(str(exc)) from None
 
