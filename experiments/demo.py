@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from mover import PROGRESS_TOPIC, Node, NodeConfig, Team, free_port, launch
-from mover.cli import UsageError, positive
+from mover.cli import UsageError, json_object, positive
 from sim_hw import STATE_TOPIC, WorldFileError, load_world
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -70,10 +70,7 @@ def settings(args: argparse.Namespace) -> DemoSettings:
         raise UsageError(f"world file {exc}") from None
     if not spec.robots:
         raise UsageError(f"world file {world}: no [[robots]] with an id")
-    try:
-        program_args = json.loads(args.args)
-    except json.JSONDecodeError as exc:
-        raise UsageError(f"--args is not JSON: {exc.msg}") from None
+    program_args = json_object(args.args, "--args")
     goals = [m.center for m in spec.markers if m.kind == "target"]
     return DemoSettings(
         program=args.program,

@@ -16,7 +16,15 @@ from typing import TYPE_CHECKING, Any
 from ._config import NodeConfig, Team
 from ._exceptions import CallError, WireError
 from ._keys import check_name
-from .cli import UsageError, add_team_arguments, member_name, positive, team_from_args
+from .cli import (
+    UsageError,
+    add_team_arguments,
+    json_argument,
+    json_object,
+    member_name,
+    positive,
+    team_from_args,
+)
 
 if TYPE_CHECKING:
     Sub = argparse._SubParsersAction[argparse.ArgumentParser]
@@ -111,21 +119,10 @@ def run_call(args: argparse.Namespace) -> int:
         check_name("procedure", args.procedure)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
-    positional = [_json(a, f"argument {i + 1}") for i, a in enumerate(args.args)]
-    kwargs = _json(args.kwargs, "--kwargs") if args.kwargs else {}
-    if not isinstance(kwargs, dict):
-        raise UsageError("--kwargs must be a JSON object")
+    positional = [json_argument(a, f"argument {i + 1}") for i, a in enumerate(args.args)]
+    kwargs = json_object(args.kwargs, "--kwargs") if args.kwargs else {}
     team, config = team_from_args(args)
     return asyncio.run(_call(team, config, args, positional, kwargs))
-
-
-def _json(text: str, what: str) -> Any:
-    try:
-        return json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise UsageError(
-            f"{what} is not JSON ({exc.msg}): {text!r}; quote strings as '\"text\"'"
-        ) from None
 
 
 async def _call(
@@ -228,9 +225,7 @@ def register_run(sub: Sub) -> None:
 
 
 def run_run(args: argparse.Namespace) -> int:
-    kwargs = _json(args.args, "--args")
-    if not isinstance(kwargs, dict):
-        raise UsageError("--args must be a JSON object")
+    kwargs = json_object(args.args, "--args")
     try:
         check_name("program", args.program)
         robots = (

@@ -18,8 +18,10 @@ ways). Nothing here opens a session or reads the environment until it is called:
 from __future__ import annotations
 
 import argparse
+import json
 import logging
 import os
+from typing import Any
 
 from ._config import NodeConfig, Team
 from ._keys import check_name as _check_name
@@ -29,11 +31,33 @@ __all__ = [
     "UsageError",
     "add_log_arguments",
     "add_team_arguments",
+    "json_argument",
+    "json_object",
     "member_name",
     "positive",
     "setup_logging",
     "team_from_args",
 ]
+
+
+def json_argument(text: str, what: str) -> Any:
+    """The JSON value of a command-line argument ``what``, else a one-line UsageError."""
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise UsageError(
+            f"{what} is not JSON ({exc.msg}): {text!r}; quote strings as '\"text\"'"
+        ) from None
+    except RecursionError:
+        raise UsageError(f"{what} is not JSON: nested too deeply") from None
+
+
+def json_object(text: str, what: str) -> dict[str, Any]:
+    """The JSON object of a command-line argument ``what``, else a one-line UsageError."""
+    value = json_argument(text, what)
+    if not isinstance(value, dict):
+        raise UsageError(f"{what} must be a JSON object, got {type(value).__name__}")
+    return value
 
 
 def positive(text: str) -> float:

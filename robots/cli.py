@@ -23,6 +23,7 @@ from mover.cli import (
     UsageError,
     add_log_arguments,
     add_team_arguments,
+    json_object,
     setup_logging,
     team_from_args,
 )
@@ -117,13 +118,7 @@ def run(args: argparse.Namespace) -> int:
     entry: dict[str, Any] = _member(args.team_file, args.name) if args.team_file else {}
     spec = dict(entry.get("spec", {}))
     if args.spec:
-        try:
-            given = json.loads(args.spec)
-        except (json.JSONDecodeError, RecursionError) as exc:
-            raise UsageError(f"--spec is not JSON: {getattr(exc, 'msg', exc)}") from None
-        if not isinstance(given, dict):
-            raise UsageError(f"--spec must be a JSON object, got {type(given).__name__}")
-        spec.update(given)
+        spec.update(json_object(args.spec, "--spec"))
     team, config = team_from_args(args)
     kind = args.kind or entry.get("kind", "robot")
     options = backend_options(args.world, args.option or ())

@@ -27,7 +27,7 @@ from pathlib import Path
 from typing import Any
 
 from mover import NameTaken
-from mover.cli import UsageError
+from mover.cli import UsageError, json_object
 from sim_hw._process import add_world_arguments
 
 log = logging.getLogger("sim_hw.grid.cli")
@@ -187,12 +187,7 @@ def run(args: argparse.Namespace) -> int:
 
     from ._server import serve_grid
 
-    try:
-        layout = json.loads(args.layout) if args.layout else {}
-    except json.JSONDecodeError as exc:
-        raise UsageError(f"--layout is not JSON: {exc.msg}") from None
-    if not isinstance(layout, dict):
-        raise UsageError("--layout must be a JSON object")
+    layout = json_object(args.layout, "--layout") if args.layout else {}
     server = build_server(
         args.file,
         layout,
