@@ -16,7 +16,7 @@ demo: $(STAMP)
 
 test: $(STAMP)
 	$(PY) -m ruff check mover robots sim_hw programs experiments tests bench
-	$(PY) -m ruff format --check mover robots sim_hw programs experiments tests bench
+	$(PY) -m ruff format --check mover robots sim_hw programs experiments tests bench README.md
 	$(PY) -m mypy
 	$(PY) -m pytest -q
 
