@@ -21,7 +21,7 @@ import argparse
 import json
 import logging
 import os
-from typing import Any
+import typing
 
 from ._config import NodeConfig, Team
 from ._keys import check_name as _check_name
@@ -40,7 +40,7 @@ __all__ = [
 ]
 
 
-def json_argument(text: str, what: str) -> Any:
+def json_argument(text: str, what: str) -> typing.Any:
     """The JSON value of a command-line argument ``what``, else a one-line UsageError."""
     try:
         return json.loads(text)
@@ -52,7 +52,7 @@ def json_argument(text: str, what: str) -> Any:
         raise UsageError(f"{what} is not JSON: nested too deeply") from None
 
 
-def json_object(text: str, what: str) -> dict[str, Any]:
+def json_object(text: str, what: str) -> dict[str, typing.Any]:
     """The JSON object of a command-line argument ``what``, else a one-line UsageError."""
     value = json_argument(text, what)
     if not isinstance(value, dict):
