@@ -12,6 +12,8 @@ they come from; eye-bots learn from what they see. Both behaviours are plain obj
 
 from robots.stigmergic._eyebot import EyeBot, FootBotSeen, Goal, Instruction, trip_weight
 from robots.stigmergic._footbot import FootBot, FootCommand, FootPerception, Heard, Mode, Motion
+from robots.stigmergic._leds import read as read_leds
+from robots.stigmergic._leds import show as show_leds
 from robots.stigmergic._policy import (
     DIRECTIONS,
     SPACING,
@@ -38,5 +40,7 @@ __all__ = [
     "Policy",
     "direction_angle",
     "direction_index",
+    "read_leds",
+    "show_leds",
     "trip_weight",
 ]

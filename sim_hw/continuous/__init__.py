@@ -9,12 +9,15 @@ Public face (everything else is private and may change):
   lock-step or real time; robots ``join``, ``step`` and ``leave``);
 * backends of ``robots.hal`` — :func:`in_process` and :func:`remote` (over a ``mover.Node``),
   both built on :class:`SimHardware`;
+* the ceiling layer — :class:`Ceiling` of :class:`EyeBotSpec` (eye-bots above the world and the
+  devices between them and the foot-bots below);
 * recording — :class:`Recorder`, :func:`read_recording`, :func:`plot_recording`;
 * the world process — :func:`serve_world` (exports the world over zenoh).
 """
 
 from sim_hw._lockstep import RobotDropped
 
+from ._ceiling import Below, Ceiling, EyeBotSpec
 from ._generate import double_corridor, free_points, random_obstacles
 from ._hardware import SimHardware, in_process, remote
 from ._record import Recorder, plot_recording, read_recording
@@ -37,8 +40,11 @@ __all__ = [
     "DT",
     "STEPS_PER_TICK",
     "TICK",
+    "Below",
     "BoxSpec",
     "CameraSpec",
+    "Ceiling",
+    "EyeBotSpec",
     "ImmovableSpec",
     "MarkerSpec",
     "ObstacleSpec",
