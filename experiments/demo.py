@@ -1,10 +1,12 @@
 """`mover demo`: search and rescue on real processes in the simulated world, end to end.
 
-Starts a world process (lock-step, recording), one robot process per robot of the world file,
-and runs a program on them (default ``search_and_rescue``) as ``mover run`` would; shows live
-progress, then a report — winner, time per phase in simulated and wall seconds, messages per
-collective step, how far each box moved — and a PNG of the trajectories. Everything talks over
-zenoh on 127.0.0.1 with a fresh team key; nothing is left running.
+Starts the team of ``teams/search_and_rescue.toml`` with ``mover up``'s supervisor: a world
+process (lock-step, recording) and one robot process per robot of the world file; runs a
+program on them (default ``search_and_rescue``) once all are members; shows live progress, then
+a report — winner, time per phase in simulated and wall seconds, messages per collective step,
+how far each box moved — and a PNG of the trajectories. Everything talks over zenoh on
+127.0.0.1 with a fresh team key; every process's log is kept in the output folder; nothing is
+left running.
 """
 
 from __future__ import annotations
@@ -13,19 +15,19 @@ import argparse
 import asyncio
 import json
 import math
-import os
-import signal
 import sys
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from mover import PROGRESS_TOPIC, Node, NodeConfig, Team, free_port, launch
+from mover import PROGRESS_TOPIC
+from mover._up import Stopped, Supervisor, TeamFileError, TeamPlan, UpError, load_team
 from mover.cli import UsageError, json_object, positive
 from sim_hw import STATE_TOPIC, WorldFileError, load_world
 
 ROOT = Path(__file__).resolve().parents[1]
+TEAM_FILE = ROOT / "teams" / "search_and_rescue.toml"
 DEFAULT_WORLD = ROOT / "worlds" / "search_and_rescue.toml"
 
 
@@ -39,8 +41,13 @@ def register(sub: Any) -> None:
     p.add_argument("--program", default="search_and_rescue", help="the program to run")
     p.add_argument("--world", default=str(DEFAULT_WORLD), help="the world file")
     p.add_argument("--args", default="{}", metavar="JSON", help="the program's arguments")
-    p.add_argument("--out", default="out/demo", help="directory for the recording and PNG")
-    p.add_argument("--seed", type=int, default=1, help="seed of the world's sensor noise")
+    p.add_argument("--out", default="out/demo", help="directory for the logs, recording and PNG")
+    p.add_argument(
+        "--seed",
+        type=int,
+        default=1,
+        help="the run seed (the world's sensor noise and the program's choices derive from it)",
+    )
     p.add_argument("--timeout", type=positive, default=120.0, help="wall seconds before giving up")
     p.set_defaults(func=run)
 
@@ -48,7 +55,7 @@ def register(sub: Any) -> None:
 @dataclass(frozen=True)
 class DemoSettings:
     """A demo run: the program and its arguments, the world file and its robots, the goal
-    (its first target, for the report), where to write, the world's seed, the time allowed."""
+    (its first target, for the report), where to write, the run seed, the time allowed."""
 
     program: str
     world: Path
@@ -70,6 +77,8 @@ def settings(args: argparse.Namespace) -> DemoSettings:
         raise UsageError(f"world file {exc}") from None
     if not spec.robots:
         raise UsageError(f"world file {world}: no [[robots]] with an id")
+    if not 0 <= args.seed < 2**63:
+        raise UsageError(f"--seed must be from 0 to 2**63-1, got {args.seed}")
     program_args = json_object(args.args, "--args")
     goals = [m.center for m in spec.markers if m.kind == "target"]
     return DemoSettings(
@@ -84,65 +93,59 @@ def settings(args: argparse.Namespace) -> DemoSettings:
     )
 
 
+def team_plan(s: DemoSettings, source: Path = TEAM_FILE) -> TeamPlan:
+    """The demo's team file with the command line's world, robots, program and seed."""
+    try:
+        plan = load_team(source)
+    except TeamFileError as exc:
+        raise UsageError(f"team file {exc}") from None
+    if plan.world is None or plan.program is None or not plan.members:
+        raise UsageError(f"team file {source}: needs a [world], [[robots]] and a [program]")
+    group = plan.members[0]
+    robots = tuple(replace(group, name=name) for name in s.robots)  # the world file's bodies
+    return replace(
+        plan,
+        seed=s.seed,
+        world=replace(plan.world, file=s.world, expect=len(robots)),
+        members=robots,
+        program=replace(plan.program, name=s.program, args=s.program_args, members=()),
+    )
+
+
 def run(args: argparse.Namespace) -> int:
     """Run the demo the command line asks for."""
-    return asyncio.run(demo(settings(args)))
+    s = settings(args)
+    return asyncio.run(demo(s, team_plan(s)))
 
 
-async def demo(s: DemoSettings) -> int:
-    """Start the world and robot processes, run the program, report; 0 if every member ended
-    without error."""
-    s.out.mkdir(parents=True, exist_ok=True)  # once, before anything starts
-    recording, png = s.out / "run.jsonl", s.out / "trajectories.png"
-    robots = list(s.robots)
-    team = Team.generate("demo")
-    port = free_port()
-    env = {
-        **os.environ,
-        **team.env(),
-        **NodeConfig(connect=(f"tcp/127.0.0.1:{port}",)).env(),
-        "PYTHONPATH": str(ROOT),
-        "MOVER_LOG_LEVEL": os.environ.get("MOVER_LOG_LEVEL", "WARNING"),
-    }
+async def demo(s: DemoSettings, plan: TeamPlan) -> int:
+    """Start the team, run the program, report; 0 if every member ended without error."""
+    assert plan.world is not None and plan.program is not None
+    robots = plan.robots()
     wall0 = time.monotonic()
+    seen = _Seen(wall0)
+    sup = Supervisor(plan, out=s.out, echo=False)
     print(
         f"mover demo: {s.program} with {', '.join(robots)} in {s.world.name} "
-        f"(team key is fresh; zenoh on 127.0.0.1:{port}; seed {s.seed})",
+        f"(team key is fresh; zenoh on 127.0.0.1:{sup.port}; seed {s.seed}; logs in {s.out})",
         flush=True,
     )
-    procs: list[asyncio.subprocess.Process] = []
-    seen = _Seen(wall0)
     try:
-        async with Node(
-            "demo",
-            team,
-            kind="tool",
-            observer=True,
-            config=NodeConfig(listen=(f"tcp/127.0.0.1:{port}",)),
-        ) as node:
-            states = node.subscribe(STATE_TOPIC)
-            progress = node.subscribe(f"{PROGRESS_TOPIC}/demo")
-            world = [sys.executable, "-m", "mover._cli", "world", str(s.world), "--lockstep"]
-            world += ["--expect", str(len(robots)), "--seed", str(s.seed), "--timeout", "5"]
-            world += ["--record", str(recording), "--state-rate", "5"]
-            world_log = s.out / "world.log"
-            world_proc = await _spawn(world, env, log=world_log)
-            procs.append(world_proc)
-            for name in robots:
-                procs.append(await _spawn([sys.executable, "-m", "robots", "--name", name], env))
-            await _while_alive(world_proc, world_log, node.team.wait_for(["world", *robots], 60))
+        async with sup:
+            states = sup.node.subscribe(STATE_TOPIC)
+            progress = sup.node.subscribe(f"{PROGRESS_TOPIC}/{plan.program.run}")
+            await sup.wait_ready()
             print(
                 f"[{time.monotonic() - wall0:5.1f}s] world and {len(robots)} robot processes up",
                 flush=True,
             )
             watcher = asyncio.create_task(seen.watch(progress, states))
             try:
-                outcomes = await _while_alive(
-                    world_proc,
-                    world_log,
+                outcomes = await sup.guard(
                     asyncio.wait_for(
-                        launch(node, s.program, robots, s.program_args, run="demo"), s.timeout
-                    ),
+                        sup.launch(s.program, robots, s.program_args, run=plan.program.run),
+                        s.timeout,
+                    )
                 )
             finally:
                 await asyncio.sleep(0.2)
@@ -151,77 +154,22 @@ async def demo(s: DemoSettings) -> int:
     except TimeoutError:
         print(f"mover demo: no result within {s.timeout} s", file=sys.stderr)
         return 1
-    except _WorldExited as exc:
+    except UpError as exc:  # a process exited, or the team did not come up
         print(f"mover demo: {exc}", file=sys.stderr)
         return 1
-    finally:
-        await _stop(procs)
+    except Stopped:
+        print("mover demo: stopped before the report", file=sys.stderr)
+        return 130
     wall = time.monotonic() - wall0
     ok = _report(outcomes, seen.phases, seen.boxes, wall, s.goal)
+    recording, png = s.out / f"{plan.world.name}.jsonl", s.out / "trajectories.png"
     replay = await asyncio.create_subprocess_exec(
-        sys.executable,
-        "-m",
-        "mover._cli",
-        "replay",
-        str(recording),
-        "--out",
-        str(png),
-        env=env,
+        sys.executable, "-m", "mover._cli", "replay", str(recording), "--out", str(png),
         stdout=asyncio.subprocess.DEVNULL,
-    )
+    )  # fmt: skip
     if await replay.wait() == 0:
         print(f"trajectories: {png}")
     return 0 if ok else 1
-
-
-async def _spawn(
-    cmd: list[str], env: dict[str, str], *, log: Path | None = None
-) -> asyncio.subprocess.Process:
-    err = log.open("wb") if log is not None else None
-    try:
-        return await asyncio.create_subprocess_exec(
-            *cmd, env=env, stdin=asyncio.subprocess.PIPE, stdout=asyncio.subprocess.DEVNULL,
-            stderr=err,
-        )  # fmt: skip
-    finally:
-        if err is not None:
-            err.close()
-
-
-class _WorldExited(Exception):
-    """The world process ended before the demo did."""
-
-
-async def _while_alive(world: asyncio.subprocess.Process, log: Path, work: Any) -> Any:
-    """Await ``work`` unless the world process exits first: then say why, in its own words."""
-    task = asyncio.ensure_future(work)
-    ended = asyncio.ensure_future(world.wait())
-    try:
-        await asyncio.wait({task, ended}, return_when=asyncio.FIRST_COMPLETED)
-    finally:
-        ended.cancel()
-    if task.done():
-        return task.result()
-    task.cancel()
-    await asyncio.gather(task, return_exceptions=True)
-    text = await asyncio.to_thread(log.read_text, errors="replace")
-    lines = [line for line in text.splitlines() if line.strip()]
-    said = lines[-1] if lines else "nothing"
-    code = world.returncode or 0
-    how = f"was killed by signal {-code}" if code < 0 else f"exited with code {code}"
-    raise _WorldExited(f"the world process {how}; its last word: {said}")
-
-
-async def _stop(procs: list[asyncio.subprocess.Process]) -> None:
-    for p in reversed(procs):  # robots first, then the world (which closes its recording)
-        if p.returncode is None:
-            p.send_signal(signal.SIGINT)
-    for p in procs:
-        try:
-            await asyncio.wait_for(p.wait(), 10)
-        except TimeoutError:
-            p.kill()
-            await p.wait()
 
 
 @dataclass

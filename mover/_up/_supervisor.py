@@ -1,0 +1,448 @@
+"""Start a team's processes, watch them, and stop them all: the engine of ``mover up``.
+
+Every process gets its own session (process group), so a terminal's Ctrl-C reaches only
+``mover up``, which then stops the team in order: SIGINT to every member's group (their clean
+exit), SIGTERM after ``STOP_GRACE`` seconds, SIGKILL after ``KILL_GRACE`` more; the router last.
+No orphan is left if ``mover up`` itself is killed: each child is started through a few lines
+of Python that ask Linux for SIGTERM when their parent dies (``PR_SET_PDEATHSIG``, kept across
+``exec``) and exit if the parent is already gone; elsewhere this guard is skipped.
+
+Each process's standard output and error go through one pipe to its log file in the run folder
+(``<name>.log``) and, prefixed with ``[name]``, to this process's standard output. Readiness is
+membership: ``mover up`` is a member itself (kind ``tool``, named ``up``) and waits until the
+world and every member are members of the team, while any process that exits first fails the
+wait at once with its last words.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import collections
+import contextlib
+import inspect
+import json
+import os
+import signal
+import sys
+import time
+from collections.abc import Awaitable
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import TracebackType
+from typing import IO, Any, TypeVar
+
+from .._config import NodeConfig, Team, free_port
+from .._node import Node
+from .._programs import PROGRESS_TOPIC, launch
+from ._plan import ProcessPlan, Seeds, processes, resolved, seeds, uses_router
+from ._teamfile import SUPERVISOR, TeamPlan
+
+_T = TypeVar("_T")
+
+STOP_GRACE = 5.0
+"""Seconds a process has to end after SIGINT before it gets SIGTERM."""
+KILL_GRACE = 2.0
+"""Seconds after SIGTERM before SIGKILL."""
+ROUTER_READY = 10.0
+"""Seconds a router has to say it listens."""
+LAST_LINES = 20
+"""Lines of each process's output kept for the error when it exits."""
+MAX_LINE = 2**20
+"""The longest output line read from a process (a longer one is cut)."""
+
+# Run before exec: SIGTERM when the parent dies (Linux), and no start if it already has.
+_GUARD = (
+    "import ctypes,os,sys\n"
+    "try: ctypes.CDLL(None).prctl(1, 15)\n"  # PR_SET_PDEATHSIG, SIGTERM
+    "except (OSError, AttributeError): pass\n"
+    "if os.getppid() != int(sys.argv[1]): sys.exit(70)\n"
+    "os.execv(sys.argv[2], sys.argv[2:])\n"
+)
+
+
+class UpError(Exception):
+    """``mover up`` cannot go on: one line saying why."""
+
+
+class ProcessExited(UpError):
+    """A process ended that the team cannot do without (or one ended before it was ready)."""
+
+    def __init__(self, name: str, code: int, last: list[str]) -> None:
+        self.name, self.code, self.last = name, code, last
+        how = f"was killed by signal {-code}" if code < 0 else f"exited with code {code}"
+        said = last[-1] if last else "nothing"
+        super().__init__(f"the {name} process {how}; its last word: {said}")
+
+
+class Stopped(Exception):
+    """The team was asked to stop (Ctrl-C or SIGTERM)."""
+
+
+@dataclass
+class _Child:
+    plan: ProcessPlan
+    proc: asyncio.subprocess.Process
+    log: IO[bytes]
+    last: collections.deque[str] = field(
+        default_factory=lambda: collections.deque(maxlen=LAST_LINES)
+    )
+    said_ready: asyncio.Event = field(default_factory=asyncio.Event)
+    ready: bool = False
+
+
+class Supervisor:
+    """One team, up: ``async with Supervisor(plan, out=run_dir) as up: await up.wait_ready()``.
+
+    On entry the run folder is made (with ``team.json``, the file as run) and every process
+    started; on exit every process is stopped. ``echo`` prints the processes' lines and this
+    supervisor's own on standard output. ``signals`` turns SIGINT and SIGTERM into a stop
+    (:meth:`guard` then raises :class:`Stopped`). The processes log at ``log_level``, else the
+    file's ``log_level``, else ``$MOVER_LOG_LEVEL``, else WARNING.
+    """
+
+    def __init__(
+        self,
+        plan: TeamPlan,
+        *,
+        out: Path,
+        seed: int | None = None,
+        echo: bool = True,
+        signals: bool = True,
+        log_level: str | None = None,
+    ) -> None:
+        self.plan, self.out, self.echo, self.signals = plan, out, echo, signals
+        self.log_level = log_level or plan.log_level or os.environ.get("MOVER_LOG_LEVEL")
+        self.seeds: Seeds = seeds(plan, seed)
+        self.router = uses_router(plan)
+        self.port = plan.port or free_port()
+        self.team, self.key_source = team_of(plan)
+        self.node: Node = None  # type: ignore[assignment]  # set on entry
+        self.children: list[_Child] = []
+        self.t0 = time.monotonic()
+        self._fault: asyncio.Future[UpError] | None = None
+        self._stop = asyncio.Event()
+        self._signals = 0
+        self._tasks: set[asyncio.Task[Any]] = set()
+
+    # -- life ------------------------------------------------------------------------------------
+
+    async def __aenter__(self) -> Supervisor:
+        loop = asyncio.get_running_loop()
+        self._fault = loop.create_future()
+        if self.signals:
+            for sig in (signal.SIGINT, signal.SIGTERM):
+                loop.add_signal_handler(sig, self._on_signal, sig)
+        try:
+            await self._start()
+        except BaseException:
+            await self.aclose()
+            raise
+        return self
+
+    async def __aexit__(
+        self, kind: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
+    ) -> None:
+        await self.aclose()
+
+    async def _start(self) -> None:
+        procs = processes(self.plan, self.seeds, self.out, port=self.port)
+        self.out.mkdir(parents=True, exist_ok=True)
+        data = resolved(self.plan, self.seeds, procs, self.router)
+        (self.out / "team.json").write_text(json.dumps(data, indent=2) + "\n")
+        if self.key_source == "fresh":  # so that a terminal of one's own can join the team
+            key = self.out / "team.key"
+            key.touch(mode=0o600)
+            key.write_text(self.team.key.hex() + "\n")
+            self.key_source = f"fresh, in {key}"
+        endpoint = f"tcp/127.0.0.1:{self.port}"
+        if self.router:
+            mine = NodeConfig(mode="client", listen=(), connect=(endpoint,))
+            theirs = mine
+        else:
+            mine = NodeConfig(listen=(endpoint,))
+            theirs = NodeConfig(connect=(endpoint,))
+        env = self._env(theirs)
+        rest = procs
+        if self.router:  # it must listen before anyone connects as its client
+            router = await self._spawn(procs[0], env)
+            await self.guard(
+                asyncio.wait_for(router.said_ready.wait(), ROUTER_READY), "the router to listen"
+            )
+            rest = procs[1:]
+        self.node = Node(SUPERVISOR, self.team, kind="tool", config=mine)
+        await self.node.open()
+        for p in rest:
+            await self._spawn(p, env)
+
+    def _env(self, config: NodeConfig) -> dict[str, str]:
+        env = {k: v for k, v in os.environ.items() if k != "MOVER_TEAM_KEY_FILE"}
+        level = self.log_level or "WARNING"
+        return {
+            **env,
+            **self.team.env(),
+            **config.env(),
+            "MOVER_LOG_LEVEL": level,
+            "PYTHONUNBUFFERED": "1",
+        }
+
+    async def _spawn(self, p: ProcessPlan, env: dict[str, str]) -> _Child:
+        log = _open_log(self.out / f"{p.name}.log")
+        guard = (sys.executable, "-I", "-S", "-c", _GUARD, str(os.getpid()))
+        try:
+            proc = await asyncio.create_subprocess_exec(
+                *guard, *p.argv, env=env, stdin=asyncio.subprocess.DEVNULL,
+                stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.STDOUT,
+                start_new_session=True, limit=MAX_LINE,
+            )  # fmt: skip
+        except OSError as exc:
+            log.close()
+            raise UpError(f"cannot start {p.name}: {exc.strerror or exc}") from None
+        child = _Child(p, proc, log)
+        self.children.append(child)
+        self.say(f"started {p.name} (pid {proc.pid})")
+        self._keep(self._watch(child))
+        return child
+
+    def _keep(self, work: Awaitable[None]) -> None:
+        task = asyncio.ensure_future(work)
+        self._tasks.add(task)
+        task.add_done_callback(self._tasks.discard)
+
+    async def _watch(self, child: _Child) -> None:
+        """Pump the child's lines until its output ends, then tell how it ended."""
+        assert child.proc.stdout is not None
+        width = max(len(c.plan.name) for c in self.children)
+        try:
+            while True:
+                try:
+                    raw = await child.proc.stdout.readline()
+                except ValueError:  # a line longer than MAX_LINE: take what came
+                    raw = await child.proc.stdout.read(MAX_LINE) + b"\n"
+                if not raw:
+                    break
+                child.log.write(raw)
+                child.log.flush()
+                text = raw.decode(errors="replace").rstrip()
+                child.last.append(text)
+                if child.plan.ready_line and text.startswith(child.plan.ready_line):
+                    child.said_ready.set()
+                if self.echo:
+                    print(f"[{child.plan.name:<{width}}] {text}", flush=True)
+            code = await child.proc.wait()
+        finally:
+            child.log.close()
+        if self._stop.is_set():
+            return
+        what = f"exited with code {code}" if code >= 0 else f"was killed by signal {-code}"
+        self.say(f"{child.plan.name} {what}")
+        if child.plan.required or not child.ready:
+            self._fail(ProcessExited(child.plan.name, code, list(child.last)))
+
+    def _fail(self, fault: UpError) -> None:
+        if self._fault is not None and not self._fault.done():
+            self._fault.set_result(fault)
+
+    def _on_signal(self, sig: int) -> None:
+        self._signals += 1
+        if self._signals == 1:
+            name = "Ctrl-C" if sig == signal.SIGINT else signal.Signals(sig).name
+            self.say(f"{name}: stopping the team", force=True)
+            self._stop.set()
+        else:  # asked twice: no more patience
+            for c in self.children:
+                _signal(c, signal.SIGKILL)
+
+    def say(self, text: str, *, force: bool = False) -> None:
+        """A line of ``mover up``'s own, prefixed ``[up]`` (only with ``echo``, or ``force``)."""
+        if self.echo or force:
+            print(f"[{SUPERVISOR}] {text}", flush=True)
+
+    # -- waiting -----------------------------------------------------------------------------------
+
+    async def guard(self, work: Awaitable[_T], what: str = "") -> _T:
+        """Await ``work`` unless a process fails or a stop is asked first (then raise
+        :class:`ProcessExited` or :class:`Stopped`). With ``what``, a TimeoutError of ``work``
+        becomes an :class:`UpError` saying what was waited for."""
+        assert self._fault is not None
+        task = asyncio.ensure_future(work)
+        stop = asyncio.ensure_future(self._stop.wait())
+        try:
+            await asyncio.wait({task, stop, self._fault}, return_when=asyncio.FIRST_COMPLETED)
+        finally:
+            stop.cancel()
+        if not task.done():
+            task.cancel()
+            with contextlib.suppress(BaseException):
+                await task
+            if self._fault.done():
+                raise self._fault.result()
+            raise Stopped()
+        if what:
+            try:
+                return task.result()
+            except TimeoutError:
+                raise UpError(f"no {what} within the time allowed") from None
+        return task.result()
+
+    async def wait_ready(self) -> float:
+        """Wait (bounded by the file's ``ready_timeout``) until every process of the team is a
+        member; return the seconds it took. Raises :class:`UpError` naming who is missing."""
+        names = [c.plan.name for c in self.children if c.plan.member]
+        try:
+            await self.guard(self.node.team.wait_for(names, timeout=self.plan.ready_timeout))
+        except TimeoutError:
+            missing = sorted(set(names) - self.node.team.members())
+            raise UpError(
+                f"not ready within {self.plan.ready_timeout:g} s: {', '.join(missing)} "
+                f"did not join (see their logs in {self.out})"
+            ) from None
+        for c in self.children:
+            c.ready = True
+        took = time.monotonic() - self.t0
+        return took
+
+    async def wait_stopped(self) -> None:
+        """Keep the team up until a stop is asked or a required process exits."""
+        await self.guard(asyncio.Event().wait())
+
+    # -- runs --------------------------------------------------------------------------------------
+
+    async def launch(
+        self, program: str, members: list[str], args: dict[str, Any], *, run: str
+    ) -> dict[str, dict[str, Any]]:
+        """:func:`mover.launch` with the run's program seed (and the file's ``share``), when
+        this version of ``launch`` takes them."""
+        extra: dict[str, Any] = {}
+        takes = inspect.signature(launch).parameters
+        if "seed" in takes:
+            extra["seed"] = self.seeds.program
+        if "share" in takes and self.plan.program is not None and self.plan.program.share:
+            extra["share"] = True
+        return await launch(self.node, program, members, args, run=run, **extra)
+
+    async def run_program(self) -> bool:
+        """Start the file's program, print its progress and outcomes; True if every member
+        ended without error."""
+        p = self.plan.program
+        assert p is not None
+        members = list(p.members) or self.plan.robots()
+        progress = self.node.subscribe(f"{PROGRESS_TOPIC}/{p.run}")
+        t0 = time.monotonic()
+
+        async def show() -> None:
+            async for m in progress:
+                data = dict(m.data) if isinstance(m.data, dict) else {"data": m.data}
+                member, phase = data.pop("member", m.sender), data.pop("phase", "?")
+                extra = " ".join(f"{k}={_short(v)}" for k, v in data.items())
+                print(
+                    f"[{p.run}] {time.monotonic() - t0:6.1f}s {member}: {phase} {extra}".rstrip(),
+                    flush=True,
+                )
+
+        shower = asyncio.create_task(show())
+        print(
+            f"[{p.run}] {p.name} on {', '.join(members)} (program seed {self.seeds.program})",
+            flush=True,
+        )
+        try:
+            outcomes = await self.launch(p.name, members, p.args, run=p.run)
+        finally:
+            await asyncio.sleep(0.1)  # the last progress reports
+            shower.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await shower
+            progress.close()
+        ok = True
+        for member, outcome in outcomes.items():
+            if "error" in outcome:
+                ok = False
+                print(f"[{p.run}] {member}: FAILED {outcome['error']}", flush=True)
+            else:
+                result = json.dumps(outcome.get("result"), default=str)
+                print(f"[{p.run}] {member}: {result}", flush=True)
+        took = time.monotonic() - t0
+        print(f"[{p.run}] {'ended' if ok else 'FAILED'} after {took:.1f} s", flush=True)
+        return ok
+
+    # -- stopping ----------------------------------------------------------------------------------
+
+    async def aclose(self) -> None:
+        """Stop every process (members first, the router last) and close the node; bounded by
+        ``STOP_GRACE + KILL_GRACE`` per stage."""
+        self._stop.set()  # from now on an exit is expected (a second Ctrl-C kills: _on_signal)
+        t0 = time.monotonic()
+        members = [c for c in self.children if c.plan.member]
+        await _stop_all(members)
+        if self.node is not None:
+            with contextlib.suppress(Exception):
+                await self.node.close()
+        await _stop_all([c for c in self.children if not c.plan.member])
+        if self._tasks:
+            await asyncio.wait(self._tasks, timeout=KILL_GRACE)
+        if self.signals:
+            loop = asyncio.get_running_loop()
+            for sig in (signal.SIGINT, signal.SIGTERM):
+                loop.remove_signal_handler(sig)
+        if self.children:
+            self.say(f"stopped {len(self.children)} processes in {time.monotonic() - t0:.1f} s")
+
+
+async def _stop_all(children: list[_Child]) -> None:
+    alive = [c for c in children if c.proc.returncode is None]
+    for sig, grace in (
+        (signal.SIGINT, STOP_GRACE),
+        (signal.SIGTERM, KILL_GRACE),
+        (signal.SIGKILL, KILL_GRACE),
+    ):
+        for c in alive:
+            _signal(c, sig)
+        if alive:
+            await asyncio.wait([asyncio.ensure_future(c.proc.wait()) for c in alive], timeout=grace)
+        alive = [c for c in alive if c.proc.returncode is None]
+        if not alive:
+            return
+
+
+def _signal(child: _Child, sig: int) -> None:
+    """Signal the child's whole process group (its own, from ``start_new_session``)."""
+    if child.proc.returncode is not None:
+        return
+    with contextlib.suppress(ProcessLookupError, PermissionError):
+        os.killpg(child.proc.pid, sig)
+
+
+def _open_log(path: Path) -> IO[bytes]:
+    try:
+        return path.open("ab")
+    except OSError as exc:
+        raise UpError(f"cannot write {path}: {exc.strerror or exc}") from None
+
+
+def team_of(plan: TeamPlan) -> tuple[Team, str]:
+    """The team and where its key came from: the file's ``key_file``, the environment
+    (``MOVER_TEAM_KEY`` or ``MOVER_TEAM_KEY_FILE``), else a fresh key."""
+    if plan.key_file is not None:
+        try:
+            text = plan.key_file.read_text().strip()
+        except OSError as exc:
+            raise UpError(
+                f"cannot read the key file {plan.key_file}: {exc.strerror or exc}"
+            ) from None
+        try:
+            return Team(plan.name, bytes.fromhex(text)), f"from {plan.key_file}"
+        except ValueError as exc:
+            raise UpError(f"the key file {plan.key_file}: not a hex key ({exc})") from None
+    if os.environ.get("MOVER_TEAM_KEY") or os.environ.get("MOVER_TEAM_KEY_FILE"):
+        try:
+            return Team.from_env(plan.name), "from the environment"
+        except ValueError as exc:
+            raise UpError(str(exc)) from None
+    return Team.generate(plan.name), "fresh"
+
+
+def _short(value: Any) -> str:
+    if isinstance(value, float):
+        return f"{value:.2f}"
+    if isinstance(value, list) and value and all(isinstance(v, float) for v in value):
+        return "[" + ", ".join(f"{v:.2f}" for v in value) + "]"
+    return str(value)
