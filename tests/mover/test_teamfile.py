@@ -1,0 +1,220 @@
+"""Team files: what a good one plans, and a one-line error naming the line for bad ones."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from mover._up import needs_router
+from mover._up._lines import KeyLines
+from mover._up._plan import PEER_MESH_MAX, derive, members, processes, seeds, uses_router
+from mover._up._teamfile import MAX_PROCESSES, TeamFileError, load_team, parse_team
+
+ROOT = Path(__file__).resolve().parents[2]
+
+GOOD = """\
+[team]
+name = "alpha"
+seed = 7
+
+[world]
+file = "arena.toml"
+timeout = 5
+
+[[robots]]
+prefix = "r"
+count = 3
+spec = { radius = 0.2 }
+options = { call_timeout = 60 }
+placement = { start = [1.0, 1.0, 90], step = [0.5, 0] }
+
+[[robots]]
+names = ["scout"]
+kind = "scout"
+required = true
+
+[[workstations]]
+names = ["desk"]
+
+[program]
+name = "hello_team"
+args = { range = 2.5 }
+"""
+
+
+def parse(text: str, name: str = "team.toml") -> object:
+    return parse_team(text, Path("/teams") / name)
+
+
+def test_a_good_file_plans_its_processes(tmp_path: Path) -> None:
+    plan = parse_team(GOOD, tmp_path / "team.toml")
+    assert plan.name == "alpha" and plan.seed == 7
+    assert plan.world is not None and plan.world.file == tmp_path / "arena.toml"
+    assert plan.world.lockstep and plan.world.expect == 4  # the four sim robots
+    names = [m.name for m in plan.members]
+    assert names == ["r1", "r2", "r3", "scout", "desk"]
+    assert plan.robots() == ["r1", "r2", "r3", "scout"]
+    r2 = plan.members[1]
+    assert r2.spec == {"radius": 0.2, "pose": [1.5, 1.0, 90.0]} and r2.world == "world"
+    assert plan.members[3].required and not plan.members[0].required
+    assert plan.members[4].hardware == "none" and plan.members[4].kind == "workstation"
+    s = seeds(plan)
+    assert (s.run, s.world, s.program) == (7, derive(7, "world"), derive(7, "program"))
+    assert seeds(plan, 8).world != s.world  # the command line's seed wins
+    procs = processes(plan, s, tmp_path, port=7000)
+    assert [p.name for p in procs] == ["world", "r1", "r2", "r3", "scout", "desk"]
+    world = procs[0].argv
+    assert world[-11:] == (
+        *("world", str(tmp_path / "arena.toml"), "--name", "world", "--seed", str(s.world)),
+        *("--lockstep", "--expect", "4", "--timeout", "5"),
+    )
+    r1 = " ".join(procs[1].argv)
+    assert "--hardware sim --world world --spec" in r1 and "--option call_timeout=60" in r1
+    assert procs[5].argv[-6:] == ("--name", "desk", "--kind", "workstation", "--hardware", "none")
+
+
+def test_a_large_team_gets_a_router_and_a_file_may_choose(tmp_path: Path) -> None:
+    assert not needs_router(PEER_MESH_MAX) and needs_router(PEER_MESH_MAX + 1)
+    big = '[team]\nname = "big"\n[[workstations]]\nprefix = "w"\ncount = 12\n'
+    plan = parse_team(big, tmp_path / "t.toml")
+    assert members(plan) == 13 and uses_router(plan)  # twelve and mover up itself
+    procs = processes(plan, seeds(plan, 1), tmp_path, port=7001)
+    assert procs[0].name == "router" and not procs[0].member and procs[0].required
+    assert "tcp/127.0.0.1:7001" in procs[0].argv
+    small = parse_team(big.replace("12", "2"), tmp_path / "t.toml")
+    assert not uses_router(small)
+    forced = parse_team(big.replace("count = 12", "count = 2").replace(
+        'name = "big"', 'name = "big"\ntopology = "router"'), tmp_path / "t.toml")  # fmt: skip
+    assert uses_router(forced)
+    peer = parse_team(big.replace('name = "big"', 'name = "big"\ntopology = "peer"'), tmp_path)
+    assert not uses_router(peer)
+
+
+def test_a_grid_world_and_its_robots(tmp_path: Path) -> None:
+    text = (
+        '[team]\nname = "ants"\n[world]\nkind = "grid"\nfile = "f.json"\n'
+        'layout = { base = [6, 6] }\nuntil = "delivered"\n'
+        '[[robots]]\nprefix = "f"\ncount = 2\nspec = { view = 0 }\n'
+        '[program]\nname = "foraging"\nargs = { method = "cmarking" }\n'
+    )
+    plan = parse_team(text, tmp_path / "t.toml")
+    assert plan.world is not None and plan.world.name == "gridworld" and plan.world.expect == 2
+    procs = processes(plan, seeds(plan, 3), tmp_path, port=7002)
+    assert procs[0].argv[3:5] == ("gridworld", str(tmp_path / "f.json"))
+    assert '--layout {"base": [6, 6]}' in " ".join(procs[0].argv)
+    assert "--hardware grid --world gridworld" in " ".join(procs[1].argv)
+
+
+BAD = [
+    # (text, line, what the error says)
+    ('[team]\nname = "a"\nsede = 1\n', 3, "team.sede: unknown key (did you mean 'seed'?)"),
+    (
+        '[team]\nname = "a"\n[[robots]]\nprefix = "r"\ncount = 2\n[[robots]]\nprefix = "s"\n'
+        "count = 1000\n",
+        8,
+        f"robots[1].count: must be from 1 to {MAX_PROCESSES}",
+    ),
+    (
+        '[team]\nname = "a"\n[[robots]]\nnames = ["x"]\n[[robots]]\nnames = ["y", "x"]\n',
+        5,
+        "robots[1]: the name 'x' is taken",
+    ),
+    ('[team]\nname = "a"\n[[robots]]\nnames = ["up"]\n', 3, "taken by mover up itself"),
+    (
+        '[team]\nname = "a"\n[world]\nfile = "w.toml"\nlockstep = true\nspeed = 2\n',
+        6,
+        "world.speed: a lock-step world has no speed",
+    ),
+    (
+        '[team]\nname = "a"\n[world]\nkind = "grid"\nfile = "g.json"\nrecord = true\n',
+        6,
+        "world.record: unknown key in a grid world",
+    ),
+    (
+        '[team]\nname = "a"\n[[robots]]\nnames = ["r"]\n\n[program]\nname = "p"\nmembers = ["q"]\n',
+        8,
+        "program.members[0]: 'q' is no member",
+    ),
+    (
+        '[team]\nname = "a"\n[[robots]]\nnames = ["r1", "r2"]\nposes = [[1, 2, 0]]\n',
+        5,
+        "robots[0].poses: must be a list of 2 poses",
+    ),
+    ('[team]\nname = "a b"\n', 2, "team.name: bad member name"),
+    ('[team]\nname = "a"\nseed = -1\n', 3, "team.seed: must be from 0"),
+    ('[team]\nname = "a"\ntopology = "star"\n', 3, "must be one of auto, peer, router"),
+    ('[team]\nname = "a"\n[world]\nfile = "w.toml"\n[world.x]\n', 5, "world.x: unknown key"),
+    ('[team]\nname = "a"\nseed = = 1\n', 3, "not valid TOML"),
+    ('[tema]\nname = "a"\n', 1, "tema: unknown key (did you mean 'team'?)"),
+    (
+        '[team]\nname = "a"\n[[workstations]]\nprefix = "w"\ncount = 150\n'
+        '[[robots]]\nprefix = "r"\ncount = 60\n',
+        3,  # robots are counted first: the workstations cross the bound
+        "workstations[0]: more than 200 processes",
+    ),
+]
+
+
+@pytest.mark.parametrize(("text", "line", "said"), BAD, ids=[b[2][:30] for b in BAD])
+def test_a_bad_file_names_its_line(text: str, line: int, said: str) -> None:
+    with pytest.raises(TeamFileError) as caught:
+        parse(text)
+    message = str(caught.value)
+    assert message.startswith(f"/teams/team.toml:{line}: "), message
+    assert said in message, message
+    assert "\n" not in message
+
+
+def test_no_team_table_and_an_unreadable_file(tmp_path: Path) -> None:
+    with pytest.raises(TeamFileError, match=r"needs a \[team\] table"):
+        parse("[[robots]]\nnames = ['r']\n")
+    with pytest.raises(TeamFileError, match="cannot read"):
+        load_team(tmp_path / "missing.toml")
+
+
+def test_key_lines_follow_arrays_of_tables_and_dotted_keys() -> None:
+    text = (
+        "[team]\nname = 'a'\n"  # 1-2
+        "[[robots]]\nprefix = 'r'\n"  # 3-4
+        "[[robots]]\n"  # 5
+        "spec.radius = 0.2\n"  # 6
+        'text = """\nfake = 1\n"""\n'  # 7-9: a multi-line string is no key
+        "poses = [\n  [1, 2, 3],\n]\n"  # 10-12
+        "count = 2  # trailing\n"  # 13
+        "[robots.options]\ncall_timeout = 1\n"  # 14-15: a sub-table of the last robots entry
+    )
+    lines = KeyLines(text)
+    assert lines.line(("team", "name")) == 2
+    assert lines.line(("robots", 0, "prefix")) == 4
+    assert lines.line(("robots", 1)) == 5
+    assert lines.line(("robots", 1, "spec", "radius")) == 6
+    assert lines.line(("robots", 1, "fake")) == 5  # not a key: the nearest enclosing one
+    assert lines.line(("robots", 1, "poses", 1)) == 10
+    assert lines.line(("robots", 1, "count")) == 13
+    assert lines.line(("robots", 1, "options", "call_timeout")) == 15
+
+
+def test_the_command_line_says_one_line_for_a_bad_file(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.toml"
+    bad.write_text('[team]\nname = "a"\n[[robots]]\nnames = ["r"]\ncuont = 3\n')
+    done = subprocess.run(
+        [sys.executable, "-m", "mover._up", str(bad)],
+        capture_output=True, text=True, timeout=30, cwd=ROOT,
+    )  # fmt: skip
+    assert done.returncode == 2
+    assert "Traceback" not in done.stderr + done.stdout
+    assert done.stderr.strip().splitlines() == [
+        f"mover up: {bad}:5: robots[0].cuont: unknown key in a robot group (did you mean "
+        "'count'?); known: names, prefix, count, first, kind, required, hardware, world, spec, "
+        "options, poses, placement"
+    ]
+
+
+def test_the_demo_team_file_checks() -> None:
+    plan = load_team(ROOT / "teams" / "search_and_rescue.toml")
+    assert plan.world is not None and plan.world.lockstep and plan.world.expect == 3
+    assert plan.robots() == ["elvis", "ernst", "moseley"]
+    assert plan.program is not None and plan.program.name == "search_and_rescue"
