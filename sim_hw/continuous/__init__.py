@@ -4,7 +4,7 @@ Public face (everything else is private and may change):
 
 * world description — :class:`WorldSpec` and its parts, :func:`load_world`, the generators
   :func:`random_obstacles`, :func:`free_points` and
-  :func:`double_corridor`, and :class:`WorldFileError`;
+  :func:`double_corridor` (with :func:`corridor_paths`), and :class:`WorldFileError`;
 * the world — :class:`World` (synchronous, deterministic) and :class:`WorldServer` (its clock:
   lock-step or real time; robots ``join``, ``step`` and ``leave``);
 * backends of ``robots.hal`` — :func:`in_process` and :func:`remote` (over a ``mover.Node``),
@@ -18,7 +18,7 @@ Public face (everything else is private and may change):
 from sim_hw._lockstep import RobotDropped
 
 from ._ceiling import Below, Ceiling, EyeBotSpec
-from ._generate import double_corridor, free_points, random_obstacles
+from ._generate import corridor_paths, double_corridor, free_points, random_obstacles
 from ._hardware import SimHardware, in_process, remote
 from ._record import Recorder, plot_recording, read_recording
 from ._spec import (
@@ -58,6 +58,7 @@ __all__ = [
     "WorldFileError",
     "WorldServer",
     "WorldSpec",
+    "corridor_paths",
     "double_corridor",
     "free_points",
     "in_process",

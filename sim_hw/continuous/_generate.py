@@ -93,26 +93,17 @@ def double_corridor(
     length: float = 20.0, ratio: float = 1.0, width: float = 1.0, room: float = 3.0
 ) -> WorldSpec:
     """Ducatelle et al.'s double corridor (Fig. 3): a source room (bottom) and a target room
-    (top) joined by a straight right corridor of ``length`` and a left one about ``ratio`` times
-    as long (a detour sideways). Markers ``source`` and ``target`` sit in the rooms."""
-    if ratio < 1.0:
-        raise ValueError("ratio must be >= 1")
-    c = width
-    detour = (ratio - 1.0) * length / 2.0
-    margin = 1.0
-    left = margin  # x of the left corridor's outer strip
-    entry = left + detour  # x where the left corridor leaves the rooms
-    right = entry + c + max(2.0, 2 * c)
-    w = right + c + margin
-    y0, y1 = room, room + length
-    free = [
-        (right, y0, right + c, y1),
-        (left, y0, left + c, y1),
-        (left, y0, entry + c, y0 + c),
-        (left, y1 - c, entry + c, y1),
-    ]
-    xs = sorted({0.0, left, left + c, entry, entry + c, right, right + c, w})
-    ys = sorted({y0, y0 + c, y1 - c, y1})
+    (top), each ``room`` deep, joined by a straight right corridor of ``length`` and a left one
+    ``ratio`` times as long: it leaves the rooms as far to the left of the source and target as
+    the right one does to their right, and makes a sideways detour of ``(ratio - 1) · length / 2``
+    walled off from the rooms. Markers ``source`` and ``target`` sit in the middle of the rooms;
+    :func:`corridor_paths` gives the corridors' middle lines."""
+    size, free, paths = _double_corridor(length, ratio, width, room)
+    w, h = size
+    middle = paths["right"][0][0] - 1.5 * width  # the source and target are between the two
+    y0, y1 = room, h - room
+    xs = sorted({0.0, w, *(v for r in free for v in (r[0], r[2]))})
+    ys = sorted({y0, y1, *(v for r in free for v in (r[1], r[3]))})
     obstacles = []
     for i in range(len(xs) - 1):
         for j in range(len(ys) - 1):
@@ -124,12 +115,58 @@ def double_corridor(
                 continue
             obstacles.append(ObstacleSpec("box", center=(cx, cy), size=(sx, sy)))
     markers = (
-        MarkerSpec("target", "source", (w / 2, room / 2), 0.5),
-        MarkerSpec("target", "target", (w / 2, y1 + room / 2), 0.5),
+        MarkerSpec("target", "source", (middle, room / 2), 0.5),
+        MarkerSpec("target", "target", (middle, y1 + room / 2), 0.5),
     )
     return WorldSpec(
-        size=(w, y1 + room),
+        size=size,
         name=f"double-corridor-r{ratio:g}",
         obstacles=tuple(obstacles),
         markers=markers,
     )
+
+
+def corridor_paths(
+    length: float = 20.0, ratio: float = 1.0, width: float = 1.0, room: float = 3.0
+) -> dict[str, tuple[tuple[float, float], ...]]:
+    """The middle lines of :func:`double_corridor`'s corridors, from the source room to the
+    target room: ``{"right": ..., "left": ...}``, each a polyline."""
+    return _double_corridor(length, ratio, width, room)[2]
+
+
+Rect = tuple[float, float, float, float]
+
+
+def _double_corridor(
+    length: float, ratio: float, width: float, room: float
+) -> tuple[tuple[float, float], list[Rect], dict[str, tuple[tuple[float, float], ...]]]:
+    """The arena's size, its free rectangles in the corridor band, and the middle lines."""
+    if ratio < 1.0:
+        raise ValueError("ratio must be >= 1")
+    c, margin = width, 1.0
+    stub = 2.0 * c  # the left corridor goes this far up (down) before it turns sideways
+    if ratio > 1.0 and length < 2 * stub + c:
+        raise ValueError(f"length must be at least {2 * stub + c:g} for a detour")
+    detour = (ratio - 1.0) * length / 2.0
+    middle = margin + c / 2 + detour + 1.5 * c  # x of the source and target
+    xl, xr = middle - 1.5 * c, middle + 1.5 * c
+    w = xr + c / 2 + margin
+    y0, y1 = room, room + length
+    h = y1 + room
+    half = c / 2
+    free: list[Rect] = [(xr - half, y0, xr + half, y1)]
+    right = ((xr, y0), (xr, y1))
+    if detour == 0.0:
+        free.append((xl - half, y0, xl + half, y1))
+        left: tuple[tuple[float, float], ...] = ((xl, y0), (xl, y1))
+    else:
+        xd, ya, yb = xl - detour, y0 + stub, y1 - stub
+        free += [
+            (xl - half, y0, xl + half, ya + half),
+            (xd - half, ya - half, xl + half, ya + half),
+            (xd - half, ya - half, xd + half, yb + half),
+            (xd - half, yb - half, xl + half, yb + half),
+            (xl - half, yb - half, xl + half, y1),
+        ]
+        left = ((xl, y0), (xl, ya), (xd, ya), (xd, yb), (xl, yb), (xl, y1))
+    return (w, h), free, {"right": right, "left": left}
