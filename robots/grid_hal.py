@@ -131,11 +131,21 @@ class RoundClock(Protocol):
     def owned(self, at: int) -> AbstractAsyncContextManager[None]:
         """Let the calling task (and the tasks it starts) drive the rounds from round ``at``.
 
-        Idle ticks (the robot process keeps the world going while no program runs) stop at
-        round ``at``; inside the block rounds advance only when the owner ticks. Members that
-        agree on ``at`` start on the same world round. Raises RuntimeError if round ``at`` has
-        already passed.
+        Until round ``at`` the clock hands in empty actions (stays) itself, and other tasks'
+        ticks stop at round ``at``; inside the block rounds advance only when the owner ticks.
+        Members that agree on ``at`` start on the same world round. Raises RuntimeError if
+        round ``at`` has already passed.
         """
+        ...
+
+    def idling(self) -> AbstractAsyncContextManager[None]:
+        """Be idle for the block: the robot stays, and a lock-step world neither waits for its
+        actions nor holds a round for it (see ``robots.hal.Clock.idling``)."""
+        ...
+
+    async def passed(self, t: float) -> None:
+        """Return once this robot has handed in an action for a round after round ``t``;
+        HardwareLost if the hardware goes away meanwhile (see ``robots.hal.Clock.passed``)."""
         ...
 
 

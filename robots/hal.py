@@ -235,10 +235,27 @@ class Clock(Protocol):
         """Keep the hardware ticking, with the current commands, while the block awaits
         something else (a message, a team step).
 
-        In lock-step simulation the world waits for every robot's command each tick, and drops
-        a robot that stays silent; a robot waiting on its team must keep ticking. On hardware
-        with its own clock this does nothing.
+        In lock-step simulation the world waits for the command of every robot that is not
+        idle each tick; a robot waiting on its team must keep ticking. On hardware with its
+        own clock this does nothing.
         """
+        ...
+
+    def idling(self) -> AbstractAsyncContextManager[None]:
+        """Be idle for the block: the drive is stopped, and a lock-step world neither waits
+        for this robot's commands nor advances a tick for it (a world whose robots are all idle
+        holds still). The readings stay current where the world sends them.
+
+        Entering and leaving are acknowledged by the world: once the block is left, the world
+        waits for this robot's command again, from the tick of the readings then. No ticks
+        inside the block (``tick()`` raises RuntimeError); ``await passed(math.inf)`` in it
+        waits until the hardware is lost (HardwareLost). A real-time world ticks on its own.
+        """
+        ...
+
+    async def passed(self, t: float) -> None:
+        """Return once this robot has handed in a command for a tick whose time is after ``t``
+        (at once if it has); raise HardwareLost if the hardware goes away meanwhile."""
         ...
 
 

@@ -5,27 +5,44 @@ every robot's command, remove a robot); the pymunk world and the grid world are 
 What the door owns:
 
 * **joins** — a robot asks to join with its settings; the stepper checks them at once (a bad
-  spec fails the join at once) and places the robot at the next tick boundary (at once in an
-  empty world), robots that wait together in id order. Before the first tick the door waits
-  for ``expect`` robots: a stepper that ``admits_early`` (the pymunk world) puts each in the
-  world at once and re-creates them all in id order when the last expected one is in
-  (:meth:`Stepper.start`); the others (the grid) hold every join until then and place them all
-  in id order. A repeated join (a retry
-  whose reply was lost) gets the same, shielded answer.
-* **ticks** — in lock-step the world advances only when every robot in it has handed in its
-  command for the tick; commands are applied in id order. A command for a tick already done is
-  a retry: it gets the current readings and is not applied again. Waiters are shielded, so a
-  caller that gives up its call (its task was cancelled) does not take a retry's answer down.
-* **drops** — a robot silent ``timeout`` wall seconds after the first command of a tick came in
-  is dropped, with a log line, and the tick goes on without it; :meth:`LockstepDoor.drop` takes
-  a robot out at once (its process left the team).
+  spec fails the join at once) and places the robot at the next tick boundary (at once in a
+  world with no robot to wait for), robots that wait together in id order. Before the first
+  tick the door waits for ``expect`` robots: a stepper that ``admits_early`` (the pymunk world)
+  puts each in the world at once and re-creates them all in id order when the last expected one
+  is in (:meth:`Stepper.start`); the others (the grid) hold every join until then and place
+  them all in id order. A repeated join (a retry whose reply was lost) gets the same, shielded
+  answer.
+* **ticks** — in lock-step the world advances only when every robot in it that is not idle has
+  handed in its command for the tick; commands are applied in id order. The first command a
+  robot hands in for a tick is the one used: a later one for the same tick, or one for a tick
+  already done, is a retry (it gets the readings after that tick, and is never applied).
+  Waiters are shielded, so a caller that gives up its call (its task was cancelled) does not
+  take a retry's answer down.
+* **idle robots** — :meth:`LockstepDoor.idle` marks a robot idle with a standing command (its
+  stopped drive): the door no longer waits for it, and applies that command for it at every
+  tick until :meth:`LockstepDoor.wake`, from whose return on the door waits for the robot's
+  command again, from the current tick. Idle robots stay in the world and keep getting
+  readings (frames carry them, see ``sim_hw._process``). A tick needs at least one robot that
+  is not idle: a lock-step world whose robots are all idle holds still (nothing runs, no
+  timer), and is at a tick boundary, so a join is placed at once. Sequential turns skip idle
+  robots. ``expect`` is unaffected: joins are still held until ``expect`` robots are in,
+  whether or not those that are in are idle; an idle robot counts as one that is in.
+* **silence** — when a robot is still missing ``timeout`` wall seconds after the first command
+  of a tick came in, the door says so once (``waiting for robot X: tick N, K s``). With
+  ``drop_silent`` (the default, for worlds in one process, where nothing else can tell that a
+  robot's task is gone) it then drops the robot and the tick goes on without it. A world
+  process sets ``drop_silent`` off (``sim_hw._process.serve``): there liveness decides, and a
+  robot that is slow but still a member of the team is waited for however long it takes;
+  :meth:`LockstepDoor.drop` takes out a robot whose process left the team.
 * **modes** — ``speed`` set: real time, the world steps every ``period / speed`` wall seconds
-  whoever has answered (a late robot keeps its last command); ``turns="sequential"``: a tick is
-  one round in which robots act one at a time in id order, each perceiving just before its own
-  turn (the :class:`TurnStepper` extension; Simonin et al.'s section 5.1).
+  whoever has answered (a late robot keeps its last command; idle or not makes no
+  difference); ``turns="sequential"``: a tick is one round in which robots act one at a time
+  in id order, each perceiving just before its own turn (the :class:`TurnStepper` extension;
+  Simonin et al.'s section 5.1).
 
-Same seeds, world and behaviours: the same run. Costs: one dict entry and one future per robot
-per tick; the tick itself is the stepper's.
+Same seeds, world and commands: the same run, however long (in wall time) the world held
+still in between. Costs: one dict entry and one future per robot per tick; the tick itself is
+the stepper's.
 """
 
 from __future__ import annotations
@@ -114,7 +131,9 @@ class LockstepDoor(Generic[S]):
     """Runs a :class:`Stepper` in lock-step (or real time) for the robots that join it.
 
     ``expect`` robots must join before the first tick (0: start at the first join).
-    ``on_tick`` hooks are called after every tick with the commands applied.
+    ``timeout`` wall seconds after a tick's first command, a missing robot is logged, and
+    dropped if ``drop_silent`` (see the module). ``on_tick`` hooks are called after every tick
+    with the commands applied.
     """
 
     def __init__(
@@ -123,6 +142,7 @@ class LockstepDoor(Generic[S]):
         *,
         expect: int = 0,
         timeout: float = 2.0,
+        drop_silent: bool = True,
         speed: float | None = None,
         period: float = 0.1,
         turns: str = "together",
@@ -136,6 +156,7 @@ class LockstepDoor(Generic[S]):
         self.stepper = stepper
         self.expect = expect
         self.timeout = timeout
+        self.drop_silent = drop_silent
         self.speed = speed
         self.period = period
         self.turns = turns
@@ -144,8 +165,11 @@ class LockstepDoor(Generic[S]):
         self._started = expect <= 0
         self._joins: dict[str, tuple[Any, asyncio.Future[dict[str, Any]]]] = {}
         self._commands: dict[str, dict[str, Any]] = {}
+        self._idle: dict[str, dict[str, Any]] = {}  # idle robot -> its standing command
         self._waiters: dict[str, asyncio.Future[Readings]] = {}
+        self._watchers: dict[str, list[Callable[[Readings | None], None]]] = {}
         self._acted: set[str] = set()  # sequential: who has acted in this round
+        self._reported: set[str] = set()  # robots said to be waited for in this tick
         self._deadline: asyncio.TimerHandle | None = None
         self._clock_task: asyncio.Task[None] | None = None
         self._background: set[asyncio.Task[Any]] = set()
@@ -156,12 +180,17 @@ class LockstepDoor(Generic[S]):
         """Whether the world waits for every robot (not real time)."""
         return self.speed is None
 
+    @property
+    def idle_robots(self) -> frozenset[str]:
+        """The robots in the world that are idle now."""
+        return frozenset(self._idle)
+
     def keep(self, task: asyncio.Task[Any]) -> None:
         """Own ``task`` (e.g. a transport's reader): :meth:`aclose` cancels it."""
         self._background.add(task)
         task.add_done_callback(self._background.discard)
 
-    # -- the three calls ----------------------------------------------------------------------
+    # -- the calls ----------------------------------------------------------------------------
 
     async def join(self, robot: str, spec: Mapping[str, Any] | None = None) -> dict[str, Any]:
         """Add ``robot``; returns ``{"spec", "readings"}`` once it is in the world."""
@@ -169,7 +198,7 @@ class LockstepDoor(Generic[S]):
             return await asyncio.shield(self._joins[robot][1])
         st = self.stepper
         if robot in st.robots():
-            return {"spec": st.spec_of(robot), "readings": st.readings(robot)}
+            return {"spec": st.spec_of(robot), "readings": self._current(robot)}
         prepared = st.prepare(robot, spec)
         future: asyncio.Future[dict[str, Any]] = asyncio.get_running_loop().create_future()
         self._joins[robot] = (prepared, future)
@@ -181,9 +210,10 @@ class LockstepDoor(Generic[S]):
                 self._admit_now()
             if len(st.robots()) + len(self._joins) >= self.expect:
                 self._start()
-        elif not st.robots():  # an empty world is always at a tick boundary
+        elif not self._busy():  # no robot to wait for: the world is at a tick boundary
             self._admit_now()
-        return await future
+        # shielded: a caller that gives up must not take a retry's answer down
+        return await asyncio.shield(future)
 
     def submit(self, robot: str, tick: int, command: Command) -> asyncio.Future[Readings]:
         """Hand in ``robot``'s command for ``tick``; the future gets its readings after it.
@@ -194,13 +224,18 @@ class LockstepDoor(Generic[S]):
             raise RobotDropped(f"robot {robot!r} is not in the world")
         loop = asyncio.get_running_loop()
         waiter = self._waiters.get(robot)
+        if robot in self._idle and tick >= self.stepper.tick:  # a command wakes an idle robot
+            self.wake(robot)
         if self.turns == "sequential":
             return self._submit_turn(robot, tick, command, waiter)
         if self.lockstep and tick < self.stepper.tick:  # a retry whose reply was lost
             done: asyncio.Future[Readings] = loop.create_future()
             done.set_result(self.stepper.readings(robot))
             return done
-        self._commands[robot] = dict(command)
+        if not self.lockstep:
+            self._commands[robot] = dict(command)  # real time: the latest command stands
+        elif robot not in self._commands:  # the first command for a tick is the one used
+            self._commands[robot] = dict(command)
         if waiter is None:
             waiter = self._waiters[robot] = loop.create_future()
         if not self.lockstep:
@@ -220,6 +255,49 @@ class LockstepDoor(Generic[S]):
         # call (its task was cancelled) must not take the retry's readings down with it.
         return await asyncio.shield(waiter)
 
+    def idle(self, robot: str, command: Command) -> Readings:
+        """Mark ``robot`` idle: ``command`` (its stopped drive) stands for it at every tick and
+        the door does not wait for it; returns its readings now. Idempotent (a retry)."""
+        if robot not in self.stepper.robots():
+            raise RobotDropped(f"robot {robot!r} is not in the world")
+        if robot not in self._idle:
+            self._idle[robot] = dict(command)
+            log.debug("robot %s idle at %s %d", robot, self.stepper.words[1], self.stepper.tick)
+            self._maybe_step()
+        return self._current(robot)
+
+    def wake(self, robot: str) -> Readings:
+        """``robot`` is not idle any more: from now on the door waits for its command, from
+        the tick of the readings returned. Idempotent (a retry)."""
+        if robot not in self.stepper.robots():
+            raise RobotDropped(f"robot {robot!r} is not in the world")
+        if self._idle.pop(robot, None) is not None:
+            log.debug("robot %s awake at %s %d", robot, self.stepper.words[1], self.stepper.tick)
+        return self._current(robot)
+
+    async def watch(self, robot: str, on_readings: Callable[[Readings], None]) -> None:
+        """Pass ``robot``'s readings to ``on_readings`` after every tick, until the robot is
+        taken out of the world: then raise :class:`RobotDropped` (the in-process watch of an
+        idle robot; a world process's robots watch its frames and its membership instead)."""
+        if robot not in self.stepper.robots():
+            raise RobotDropped(f"robot {robot!r} is not in the world")
+        gone: asyncio.Future[None] = asyncio.get_running_loop().create_future()
+
+        def seen(readings: Readings | None) -> None:
+            if readings is not None:
+                on_readings(readings)
+            elif not gone.done():
+                gone.set_result(None)
+
+        self._watchers.setdefault(robot, []).append(seen)
+        try:
+            await gone
+        finally:
+            watchers = self._watchers.get(robot, [])
+            if seen in watchers:
+                watchers.remove(seen)
+        raise RobotDropped(f"robot {robot!r} left the world")
+
     async def leave(self, robot: str) -> None:
         """Take ``robot`` out of the world."""
         self._remove(robot)
@@ -234,7 +312,27 @@ class LockstepDoor(Generic[S]):
             self._remove(robot)
             self._maybe_step()
 
+    def status(self) -> dict[str, Any]:
+        """The door's state for tools and tests: tick, robots, idle robots, dropped ones."""
+        return {
+            "tick": self.stepper.tick,
+            "robots": sorted(self.stepper.robots()),
+            "idle": sorted(self._idle),
+            "dropped": list(self.dropped),
+            "started": self._started,
+        }
+
     # -- stepping -----------------------------------------------------------------------------
+
+    def _busy(self) -> list[str]:
+        """The robots in the world the door waits for (those not idle), in id order."""
+        return sorted(r for r in self.stepper.robots() if r not in self._idle)
+
+    def _current(self, robot: str) -> Readings:
+        """``robot``'s readings as of now, naming the tick its next command is for."""
+        if self.turns == "sequential":
+            return self._turns().sense_one(robot)
+        return self.stepper.readings(robot)
 
     def _maybe_step(self) -> None:
         if not self.lockstep:
@@ -242,11 +340,10 @@ class LockstepDoor(Generic[S]):
         if self.turns == "sequential":
             self._pump()
             return
-        robots = self.stepper.robots()
-        # commands only come from robots in the world, and leave with them: counting suffices
-        if self._started and robots and len(self._commands) >= len(robots):
+        busy = self._busy()
+        if self._started and busy and all(r in self._commands for r in busy):
             self._tick()
-        elif self._started and not robots and self._joins:  # the last robot left
+        elif self._started and not busy and self._joins:  # no one to wait for: place them
             self._admit_now()
 
     def _tick(self) -> None:
@@ -255,8 +352,14 @@ class LockstepDoor(Generic[S]):
             self._deadline = None
         st = self.stepper
         robots = st.robots()
-        commands = {r: self._commands[r] for r in sorted(self._commands) if r in robots}
+        # the first command handed in for the tick, else an idle robot's standing command
+        commands = {
+            r: self._commands[r] if r in self._commands else self._idle[r]
+            for r in sorted(robots)
+            if r in self._commands or r in self._idle
+        }
         self._commands = {}
+        self._reported.clear()
         st.advance(commands)
         admitted = self._admit()
         st.sense()
@@ -265,8 +368,16 @@ class LockstepDoor(Generic[S]):
         for robot, waiter in waiters.items():
             if not waiter.done() and robot in robots:
                 waiter.set_result(st.readings(robot))
+        self._tell_watchers()
         for hook in self.on_tick:
             hook(commands)
+
+    def _tell_watchers(self) -> None:
+        st = self.stepper
+        for robot, watchers in list(self._watchers.items()):
+            if robot in st.robots():
+                for seen in list(watchers):
+                    seen(st.readings(robot))
 
     def _start(self) -> None:
         self._started = True
@@ -311,24 +422,33 @@ class LockstepDoor(Generic[S]):
         if not self._started:
             return
         if self.turns == "sequential":
-            todo = [n for n in sorted(self.stepper.robots()) if n not in self._acted]
+            todo = [n for n in self._busy() if n not in self._acted]
             if todo and todo[0] not in self._commands:
-                self._drop_silent(todo[0], "did not take its turn in")
-            self._pump()
+                self._silent(todo[0], "did not take its turn in")
+            if self.drop_silent:
+                self._pump()
             return
-        for robot in sorted(set(self.stepper.robots()) - set(self._commands)):
-            self._drop_silent(robot, f"sent no {self.stepper.words[0]} for")
+        for robot in self._busy():
+            if robot not in self._commands:
+                self._silent(robot, f"sent no {self.stepper.words[0]} for")
         self._maybe_step()
 
-    def _drop_silent(self, robot: str, what: str) -> None:
-        log.warning(
-            "robot %s %s %s %d within %.1f s: dropped",
-            robot,
-            what,
-            self.stepper.words[1],
-            self.stepper.tick,
-            self.timeout,
-        )
+    def _silent(self, robot: str, what: str) -> None:
+        """``robot`` is silent past the timeout: drop it (``drop_silent``) or say so once."""
+        tick, n = self.stepper.words[1], self.stepper.tick
+        if not self.drop_silent:
+            if robot not in self._reported:
+                self._reported.add(robot)
+                log.warning(
+                    "waiting for robot %s: %s %d, %.1f s (%s it; it is still a member)",
+                    robot,
+                    tick,
+                    n,
+                    self.timeout,
+                    what,
+                )
+            return
+        log.warning("robot %s %s %s %d within %.1f s: dropped", robot, what, tick, n, self.timeout)
         self.dropped.append(robot)
         self._remove(robot)
 
@@ -336,12 +456,15 @@ class LockstepDoor(Generic[S]):
         self.stepper.remove(robot)
         self._acted.discard(robot)
         self._commands.pop(robot, None)
+        self._idle.pop(robot, None)
         waiter = self._waiters.pop(robot, None)
         if waiter is not None and not waiter.done():
             waiter.set_exception(RobotDropped(f"robot {robot!r} left the world"))
         joining = self._joins.pop(robot, None)
         if joining is not None and not joining[1].done():
             joining[1].cancel()
+        for seen in self._watchers.pop(robot, []):
+            seen(None)
 
     # -- sequential turns -----------------------------------------------------------------------
 
@@ -353,6 +476,7 @@ class LockstepDoor(Generic[S]):
         self, robot: str, tick: int, command: Command, waiter: asyncio.Future[Readings] | None
     ) -> asyncio.Future[Readings]:
         now = self.stepper.tick
+        pending = self._commands.get(robot)
         if tick < now or (tick == now and robot in self._acted):
             # a retry of an action already applied: the reply it waits for, or the latest
             if waiter is not None:
@@ -360,7 +484,8 @@ class LockstepDoor(Generic[S]):
             done: asyncio.Future[Readings] = asyncio.get_running_loop().create_future()
             done.set_result(self.stepper.readings(robot))
             return done
-        self._commands[robot] = {**command, "_tick": tick}
+        if pending is None or pending["_tick"] != tick:  # the first command for a tick stands
+            self._commands[robot] = {**command, "_tick": tick}
         if waiter is None:
             waiter = self._waiters[robot] = asyncio.get_running_loop().create_future()
         self._pump()
@@ -370,12 +495,17 @@ class LockstepDoor(Generic[S]):
         """Apply commands in turn for as long as the robot whose turn it is has sent one."""
         st = self._turns()
         while self._started and st.robots():
-            todo = [n for n in sorted(st.robots()) if n not in self._acted]
-            if not todo:  # the round is complete
+            todo = [n for n in self._busy() if n not in self._acted]
+            if not todo:
+                if not self._acted:  # every robot is idle: the world holds still
+                    break
+                # the round is complete
                 st.end_round()
                 self._acted.clear()
+                self._reported.clear()
                 self._resolve(self._admit())
                 st.begin_round()
+                self._tell_watchers()
                 for hook in self.on_tick:
                     hook({})
                 continue
@@ -388,7 +518,7 @@ class LockstepDoor(Generic[S]):
             command.pop("_tick")
             st.act(robot, command)
             self._acted.add(robot)
-        if self._started and not st.robots() and self._joins:
+        if self._started and not self._busy() and not self._acted and self._joins:
             self._resolve(self._admit())
         self._rearm()
 

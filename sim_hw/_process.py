@@ -1,10 +1,14 @@
 """The world process of both worlds: a lock-step door exported over a mover node.
 
 Robots call ``join(robot, spec)``, ``step(robot, tick, command)`` (in lock-step the reply comes
-once every robot's command for the tick is in and the world has stepped) and ``leave(robot)``.
-A robot whose process leaves the team is dropped (``team.on_gone``: only once it has stayed
-gone for a second, so a flapping link keeps its body); the door's own timeout still catches
-one that hangs. :func:`run_world_process` is the one main of ``mover world`` and ``mover
+once every robot's command for the tick is in and the world has stepped), ``idle(robot,
+command)`` and ``wake(robot)`` (the door stops and starts waiting for the robot), and
+``leave(robot)``; tools call ``status()``. Liveness decides drops: the door waits for a robot
+that is slow but still a member of the team however long it takes (it says so once per tick,
+after ``--timeout`` seconds); a robot whose process leaves the team is dropped
+(``team.on_gone``: only once it has stayed gone for a second, so a flapping link keeps its
+body). A dropped robot rejoins when it comes back (the robot process reconnects on
+``HardwareLost``). :func:`run_world_process` is the one main of ``mover world`` and ``mover
 gridworld``.
 """
 
@@ -69,7 +73,8 @@ def add_world_arguments(
         type=positive,
         default=timeout,
         metavar="S",
-        help=f"lock-step: drop a robot silent for S wall seconds in a {tick} (default {timeout:g})",
+        help=f"lock-step: say which robot a {tick} waits for after S wall seconds (default "
+        f"{timeout:g}); a robot is dropped only when its process leaves the team",
     )
     p.add_argument("--seed", type=int, default=0, help=f"seed of {seed}")
     p.add_argument(
@@ -96,11 +101,13 @@ def ready_line(name: str, source: str, team: Any, config: Any) -> str:
 
 
 def serve(node: Any, door: LockstepDoor[Any], *, frames: bool = True) -> None:
-    """Export ``door``'s three calls on ``node`` and drop the robots whose process left.
+    """Export ``door``'s calls on ``node`` and drop the robots whose process left.
 
-    With ``frames`` (and robots acting together), ticks are also taken and answered as frames
-    (see ``sim_hw._caller``): the join's answer says so.
+    From now on liveness decides drops (``door.drop_silent`` is turned off: a silent robot
+    that is still a member is waited for). With ``frames`` (and robots acting together), ticks
+    are also taken and answered as frames (see ``sim_hw._caller``): the join's answer says so.
     """
+    door.drop_silent = False
     offered = frames and door.turns == "together"
     if offered:
         _TickFrames(node, door)
@@ -112,12 +119,26 @@ def serve(node: Any, door: LockstepDoor[Any], *, frames: bool = True) -> None:
         readings: dict[str, Any] = await door.step(robot, tick, command)
         return readings
 
+    def idle(robot: str, command: dict[str, Any]) -> dict[str, Any]:
+        readings: dict[str, Any] = door.idle(robot, command)
+        return readings
+
+    def wake(robot: str) -> dict[str, Any]:
+        readings: dict[str, Any] = door.wake(robot)
+        return readings
+
     async def leave(robot: str) -> None:
         await door.leave(robot)
 
-    for fn in (join, step, leave):
+    def status() -> dict[str, Any]:
+        return door.status()
+
+    for fn in (join, step, idle, wake, leave, status):
         node.export(fn, name=fn.__name__)
     node.team.on_gone(lambda name: door.drop(name, "left the team"))
+    from sim_hw.view import export_scene  # what a viewer asks: view.scene (and view.frame)
+
+    export_scene(node, door)
 
 
 class _TickFrames:
@@ -161,12 +182,14 @@ class _TickFrames:
             self.send({robot: pack(waiter.result())})
 
     def flush(self, commands: Any) -> None:
-        """The tick is done: one frame with the readings of every robot that asked by frame."""
-        if not self.pending:
+        """The tick is done: one frame with the readings of every robot that asked by frame,
+        and of every idle robot (so that their readings stay current)."""
+        idle = self.door.idle_robots
+        if not self.pending and not idle:
             return
         st = self.door.stepper
         robots = st.robots()
-        entries = {r: pack(st.readings(r)) for r in self.pending if r in robots}
+        entries = {r: pack(st.readings(r)) for r in sorted({*self.pending, *idle}) if r in robots}
         self.pending.clear()
         if entries:
             self.send(entries)

@@ -1,11 +1,11 @@
 """The robots' hardware interface (robots/hal.py) implemented on a simulated world.
 
-One class, :class:`SimHardware`, serves both backends: it caches the readings of the last tick,
-collects the commands for the next one, and exchanges them through an ``exchange(tick,
-command) -> readings`` coroutine from ``sim_hw._caller`` — a direct call into a
-:class:`WorldServer` in process, or one exchange of frames per tick with the world process.
-Concurrent waiters on a tick share one exchange, so a robot sends exactly one command per tick
-however many of its tasks wait.
+One class, :class:`SimHardware`, serves both backends: it collects the commands for the next
+tick and keeps the readings of the last one in a :class:`sim_hw._caller.Ticks`, the robot's
+clock over a link to its world — a direct call into a :class:`WorldServer` in process, or one
+exchange of frames per tick with the world process. Concurrent waiters on a tick share one
+exchange, so a robot sends exactly one command per tick however many of its tasks wait, and a
+cancelled tick finishes in the background (the world never sees half of one).
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ from robots.hal import (
     Sighting,
 )
 from sim_hw import _caller
-from sim_hw._caller import Exchange
+from sim_hw._caller import Ticks, WorldLink
 
 from ._contract import Command, Readings
 from ._world import TICK
@@ -36,61 +36,69 @@ MOVED = 0.02
 
 
 class SimHardware:
-    """Readings cache and command buffer of one simulated robot; its devices are views of it."""
+    """Command buffer and clock of one simulated robot; its devices are views of it."""
 
     tick_period = TICK
 
     def __init__(
-        self, robot_id: str, spec: dict[str, Any], readings: Readings, exchange: Exchange
+        self, robot_id: str, spec: dict[str, Any], readings: Readings, link: WorldLink
     ) -> None:
         self.id = robot_id
         self.spec = spec
-        self.readings = readings
-        self._exchange = exchange
+        self._ticks = Ticks(
+            robot_id,
+            link,
+            readings,
+            tick_of=lambda r: int(r["tick"]),
+            time_of=lambda r: float(r["t"]),
+        )
         self._v = 0.0
         self._w = 0.0
         self._push: float | None = None
         self._led: str | None = None
         self._floor: list[Any] | None = None
-        self._inflight: asyncio.Future[BaseException | None] | None = None
         self._pump: asyncio.Task[None] | None = None
         self._pumps = 0
         self.max_speed = float(spec["max_speed"])
+
+    @property
+    def readings(self) -> Readings:
+        """The readings of the last tick."""
+        readings: Readings = self._ticks.readings
+        return readings
 
     # -- clock ---------------------------------------------------------------------------------
 
     def now(self) -> float:
         """Simulated time of the last readings."""
-        return float(self.readings["t"])
+        return self._ticks.now()
 
     async def tick(self) -> None:
         """Send this tick's command, wait for the next readings (shared by concurrent callers)."""
-        pending = self._inflight
-        if pending is not None:  # another task of this robot is exchanging: wait for it
-            failure = await asyncio.shield(pending)
-            if failure is not None:
-                raise failure
-            return
-        done: asyncio.Future[BaseException | None] = asyncio.get_running_loop().create_future()
-        self._inflight = done
-        try:
-            await self._exchange_once()
-        except BaseException as exc:
-            done.set_result(exc if isinstance(exc, Exception) else None)
-            raise
-        else:
-            done.set_result(None)
-        finally:
-            self._inflight = None
+        await self._ticks.tick(self._command)
 
-    async def _exchange_once(self) -> None:
+    def _command(self) -> Command:
         command: Command = {"v": self._v, "w": self._w, "push": self._push}
         if self._led is not None:
             command["led"] = self._led
         if self._floor is not None:
             command["floor"] = self._floor
         self._floor = None
-        self.readings = await self._exchange(int(self.readings["tick"]), command)
+        return command
+
+    def _stopped(self) -> Command:
+        """Stop the drive: the command an idle robot stands on."""
+        self.stop()
+        self._push = None
+        return {"v": 0.0, "w": 0.0, "push": None}
+
+    def idling(self) -> contextlib.AbstractAsyncContextManager[None]:
+        """Be idle for the block: the drive stopped, a lock-step world not waiting for us."""
+        return self._ticks.idling(self._stopped)
+
+    async def passed(self, t: float) -> None:
+        """Return once a command was handed in at a tick after simulated time ``t``."""
+        await self._ticks.passed(t)
 
     async def sleep(self, dt: float) -> None:
         """Tick until ``dt`` simulated seconds have passed (at least one tick)."""
@@ -220,6 +228,7 @@ class _Clock:
 
     def __init__(self, hw: SimHardware) -> None:
         self.now, self.tick, self.sleep, self.ticking = hw.now, hw.tick, hw.sleep, hw.ticking
+        self.idling, self.passed = hw.idling, hw.passed
 
 
 class _Drive:
@@ -275,8 +284,8 @@ class _Push:
 
 async def in_process(server: Any, robot_id: str, spec: Mapping[str, Any] | None = None) -> Hardware:
     """Join ``server`` (a :class:`WorldServer` in this process) and return the robot's HAL."""
-    joined, exchange = await _caller.in_process(server, robot_id, spec)
-    return SimHardware(robot_id, joined["spec"], joined["readings"], exchange).hardware()
+    joined, link = await _caller.in_process(server, robot_id, spec)
+    return SimHardware(robot_id, joined["spec"], joined["readings"], link).hardware()
 
 
 async def remote(
@@ -290,10 +299,10 @@ async def remote(
     """Join the world process ``world`` over ``node`` (a ``mover.Node``); return the HAL.
 
     One exchange per tick (a frame each way where the world offers it, else a call; see
-    ``sim_hw._caller``). ``call_timeout`` must outlast the world's own drop timeout, since in
-    lock-step a reply waits for every robot. The robot's id must be its node's name.
+    ``sim_hw._caller``); a call not answered in ``call_timeout`` s is asked again while the
+    world is alive. The robot's id must be its node's name.
     """
-    joined, exchange = await _caller.remote(
+    joined, link = await _caller.remote(
         node, robot_id, spec, world=world, call_timeout=call_timeout
     )
-    return SimHardware(robot_id, joined["spec"], joined["readings"], exchange).hardware()
+    return SimHardware(robot_id, joined["spec"], joined["readings"], link).hardware()

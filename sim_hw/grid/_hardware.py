@@ -1,12 +1,14 @@
 """The ``grid`` hardware backend: a robot's grid HAL (robots/grid_hal.py) over a grid world.
 
-:class:`GridRobot` caches the last perception and collects this round's action; one
-``step(robot, round, action)`` call to the world process per round exchanges them.
+:class:`GridRobot` collects this round's action and keeps the last perception in a
+:class:`sim_hw._caller.Ticks` (the robot's clock over its link to the world: one exchange per
+round, a cancelled one finished in the background, idling).
 
-Rounds belong to whoever drives them. The robot process ticks while idle, so that a lock-step
-world is not held up by a robot that runs no program; those idle ticks are paced
-(``idle_period``) and stop while a program owns the clock (:meth:`GridRobot.owned`), so that a
-program's rounds are its own: nothing is sent for a round until the program has decided.
+Rounds belong to whoever drives them. A program that owns the clock (:meth:`GridRobot.owned`)
+has its rounds to itself: nothing is sent for a round until it has decided; until the round it
+starts at, the clock hands in empty actions itself. Other tasks' ticks are paced
+(``idle_period``) and stop while the clock is owned. A robot that runs nothing is idle
+(:meth:`GridRobot.idling`): the world does not wait for it.
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ from typing import Any
 
 from robots.grid_hal import OFFSETS, GridHardware, Here, Near, Seen
 from sim_hw import _caller
-from sim_hw._caller import Exchange
+from sim_hw._caller import Ticks, WorldLink
 
 _OWNER: contextvars.ContextVar[object | None] = contextvars.ContextVar("grid_owner", default=None)
 
@@ -32,22 +34,34 @@ class GridRobot:
         robot_id: str,
         spec: dict[str, Any],
         readings: dict[str, Any],
-        exchange: Exchange,
+        link: WorldLink,
         *,
         idle_period: float = 0.01,
     ) -> None:
         self.id = robot_id
         self.spec = spec
-        self.readings = readings
         self.idle_period = idle_period
         self.range = float(spec.get("radio", float("inf")))
-        self._exchange = exchange
+        self._ticks = Ticks(
+            robot_id,
+            link,
+            readings,
+            tick_of=lambda r: int(r["round"]),
+            time_of=lambda r: float(r["round"]),
+            after=self._moved,
+        )
         self._action: dict[str, Any] = {}
         self._offset = [0, 0]
         self._lock = asyncio.Lock()
         self._owner: object | None = None
         self._hold_at: int | None = None
         self._changed = asyncio.Event()
+
+    @property
+    def readings(self) -> dict[str, Any]:
+        """The current perception."""
+        readings: dict[str, Any] = self._ticks.readings
+        return readings
 
     # -- the clock ------------------------------------------------------------------------------
 
@@ -67,8 +81,8 @@ class GridRobot:
     async def tick(self) -> None:
         """Send this round's action and wait for the next perception.
 
-        The owner of the clock exchanges at once; any other task (the idle loop) waits while
-        the clock is owned or held, and is paced by ``idle_period``.
+        The owner of the clock exchanges at once; any other task waits while the clock is
+        owned or held, and is paced by ``idle_period``.
         """
         owner = self._owner is not None and _OWNER.get() is self._owner
         while True:
@@ -79,15 +93,21 @@ class GridRobot:
             async with self._lock:
                 if not owner and self._held():
                     continue
-                action, self._action = self._action, {}
-                wanted = action.get("move")
-                self.readings = await self._exchange(self.now(), action)
-                if wanted is not None and self.readings.get("moved"):
-                    dr, dc = OFFSETS[int(wanted)]
-                    self._offset[0] += dr
-                    self._offset[1] += dc
+                await self._ticks.tick(self._take_action)
             self._notify()
             return
+
+    def _take_action(self) -> dict[str, Any]:
+        action, self._action = self._action, {}
+        return action
+
+    def _moved(self, action: Mapping[str, Any], readings: Mapping[str, Any]) -> None:
+        """An exchange ended (in its own task, even if its caller was cancelled)."""
+        wanted = action.get("move")
+        if wanted is not None and readings.get("moved"):
+            dr, dc = OFFSETS[int(wanted)]
+            self._offset[0] += dr
+            self._offset[1] += dc
 
     def _notify(self) -> None:
         self._changed.set()
@@ -95,6 +115,18 @@ class GridRobot:
 
     async def _wait_change(self) -> None:
         await self._changed.wait()
+
+    def idling(self) -> contextlib.AbstractAsyncContextManager[None]:
+        """Be idle for the block: the robot stays, a lock-step world does not wait for it."""
+        return self._ticks.idling(self._stay)
+
+    def _stay(self) -> dict[str, Any]:
+        self._action.pop("move", None)
+        return {}
+
+    async def passed(self, t: float) -> None:
+        """Return once an action was handed in for a round after round ``t``."""
+        await self._ticks.passed(t)
 
     @contextlib.asynccontextmanager
     async def owned(self, at: int) -> AsyncIterator[None]:
@@ -104,10 +136,11 @@ class GridRobot:
         self._hold_at = at
         self._notify()
         try:
-            while self.now() < at:
-                await self._wait_change()
-            async with self._lock:  # an idle exchange under way has finished
-                pass
+            while self.now() < at:  # no one else need tick us there: stay until round ``at``
+                async with self._lock:  # after any exchange under way
+                    if self.now() < at:
+                        await self._ticks.tick(dict)
+                self._notify()
             if self.now() != at:
                 raise RuntimeError(f"round {at} had already passed (now {self.now()})")
             token = object()
@@ -209,7 +242,7 @@ class GridRobot:
         """The HAL bundle for robot code."""
         return GridHardware(
             id=self.id,
-            clock=_View(self, "now", "ended", "tick", "owned"),  # type: ignore[arg-type]
+            clock=_View(self, "now", "ended", "tick", "owned", "idling", "passed"),  # type: ignore[arg-type]
             drive=_View(self, "move", "stop", "moved"),  # type: ignore[arg-type]
             odometry=_View(self, "pose"),  # type: ignore[arg-type]
             senses=_View(self, "here", "around", "rays", "compass"),  # type: ignore[arg-type]
@@ -233,9 +266,9 @@ async def in_process(
     server: Any, robot_id: str, spec: Mapping[str, Any] | None = None, *, idle_period: float = 0.0
 ) -> GridHardware:
     """Join ``server`` (a :class:`~sim_hw.grid.GridServer` in this process)."""
-    joined, exchange = await _caller.in_process(server, robot_id, spec)
+    joined, link = await _caller.in_process(server, robot_id, spec)
     return GridRobot(
-        robot_id, joined["spec"], joined["readings"], exchange, idle_period=idle_period
+        robot_id, joined["spec"], joined["readings"], link, idle_period=idle_period
     ).hardware()
 
 
@@ -251,12 +284,13 @@ async def connect(
     """Join the grid world process ``world`` over ``node`` (a ``mover.Node``); return the HAL.
 
     One exchange per round (a frame each way where the world offers it, else a call; see
-    ``sim_hw._caller``). ``call_timeout`` must outlast the world's drop timeout. The robot's id
-    must be its node's name: the world drops the robot when that member leaves the team.
+    ``sim_hw._caller``); a call not answered in ``call_timeout`` s is asked again while the
+    world is alive. The robot's id must be its node's name: the world drops the robot when
+    that member leaves the team.
     """
-    joined, exchange = await _caller.remote(
+    joined, link = await _caller.remote(
         node, robot_id, spec, world=world, call_timeout=call_timeout
     )
     return GridRobot(
-        robot_id, joined["spec"], joined["readings"], exchange, idle_period=idle_period
+        robot_id, joined["spec"], joined["readings"], link, idle_period=idle_period
     ).hardware()

@@ -73,3 +73,21 @@ async def test_without_frames_every_tick_is_a_call() -> None:
         ha = await remote(a, "a")
         await asyncio.wait_for(_ticks(ha, 5), 10)
         assert a.stats["sent.call"] == 6 and world.stats["recv.bc"] == 0
+
+
+async def test_an_idle_robot_holds_nothing_back_and_reads_the_frames() -> None:
+    async with _team(2, "a", "b") as (server, world, a, b):
+        ha, hb = await asyncio.gather(remote(a, "a"), remote(b, "b"))
+        await asyncio.wait_for(asyncio.gather(_ticks(ha, 2), _ticks(hb, 2)), 30)
+        async with hb.clock.idling():
+            assert (await world.call("world", "status", timeout=5))["idle"] == ["b"]
+            times = await asyncio.wait_for(_ticks(ha, 10), 30)
+            async with asyncio.timeout(5):  # the last frame's entry for b is on its way
+                while hb.clock.now() < times[-1]:
+                    await asyncio.sleep(0.01)
+            assert server.world.robots["b"].v == 0.0  # stopped while idle
+        assert (await world.call("world", "status", timeout=5))["idle"] == []
+        await asyncio.wait_for(asyncio.gather(_ticks(ha, 3), _ticks(hb, 3)), 30)
+        assert server.world.tick == 15 and ha.clock.now() == hb.clock.now()
+        # b's calls: its join, its first tick, idle and wake; every other tick was a frame
+        assert b.stats["sent.call"] == 4
