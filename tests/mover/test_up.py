@@ -188,3 +188,18 @@ async def test_a_router_topology_and_no_orphans_when_mover_up_is_killed(tmp_path
         if up.proc.returncode is None:
             up.proc.kill()
     assert await gone(pids, 5.0) == [], up.text
+
+
+async def test_the_foraging_team_file_runs_once_and_stops(tmp_path: Path) -> None:
+    up = await Up.start(
+        ROOT / "teams" / "foraging.toml", "--exit-after-run", "--out", str(tmp_path / "run")
+    )
+    code = await up.ended(timeout=90)
+    assert code == 0, up.text
+    results = [line for line in up.lines if re.match(r"\[forage\] f\d: \{", line)]
+    assert len(results) == 4, up.text
+    delivered = sum(json.loads(line.split(": ", 1)[1])["delivered"] for line in results)
+    assert delivered == 200, up.text  # two resources of 100 units, all brought home
+    assert "[forage] ended after" in up.text
+    assert await gone(up.pids(), 1.0) == []
+    assert "Traceback" not in up.text
