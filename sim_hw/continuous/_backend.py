@@ -31,7 +31,8 @@ class ContinuousBackend:
     ) -> Hardware:
         """Join the world ``world`` (default ``"world"``) as ``robot_id`` with body ``spec``.
 
-        ``call_timeout`` (seconds, default 30) must outlast the world's drop timeout.
+        ``call_timeout`` (seconds, default 30): a call to the world not answered in that time
+        is asked again while the world is alive.
         """
         return await remote(
             node,

@@ -84,7 +84,9 @@ class WorldStepper:
 class WorldServer(LockstepDoor[WorldStepper]):
     """Runs a :class:`World` in lock-step or in (scaled) real time for robots that join it.
 
-    ``expect`` robots must join before a lock-step world starts (0: start at the first join).
+    ``expect`` robots must join before a lock-step world starts (0: start at the first join);
+    ``timeout`` wall seconds of silence in a tick drop a robot (in process; a world process
+    only says so, see ``sim_hw._lockstep``).
     ``on_snapshot(snapshot)`` is called every ``snapshot_every`` ticks (0: never); it may be a
     coroutine function. ``on_tick(world, commands)`` is called after every tick (a recorder).
     """

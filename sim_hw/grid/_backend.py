@@ -31,8 +31,9 @@ class GridBackend:
     ) -> GridHardware:
         """Join the grid world ``world`` (default ``"gridworld"``) as ``robot_id``.
 
-        ``call_timeout`` (seconds, default 30) must outlast the world's drop timeout;
-        ``idle_period`` (seconds, default 0.01) paces the rounds while no program drives them.
+        ``call_timeout`` (seconds, default 30): a call to the world not answered in that time
+        is asked again while the world is alive; ``idle_period`` (seconds, default 0.01) paces
+        the ticks of tasks that do not own the clock.
         """
         return await connect(
             node,

@@ -312,8 +312,8 @@ class GridServer(LockstepDoor[GridStepper]):
     """Runs a grid world in lock-step rounds for the robots that join it (see the module).
 
     ``expect`` robots must join before the first round; ``timeout`` wall seconds of silence in
-    a round drop a robot; ``turns`` is ``together`` or ``sequential``. The other arguments are
-    :class:`GridStepper`'s.
+    a round drop a robot (in process; a world process only says so, see ``sim_hw._lockstep``);
+    ``turns`` is ``together`` or ``sequential``. The other arguments are :class:`GridStepper`'s.
     """
 
     def __init__(
@@ -365,7 +365,8 @@ class GridServer(LockstepDoor[GridStepper]):
         return self.stepper.over()
 
     def state(self) -> dict[str, Any]:
-        """A summary: round, robots and their cells, resources, deliveries, exploration."""
+        """A summary: round, robots and their cells (idle and dropped ones), resources,
+        deliveries, exploration."""
         st, w = self.stepper, self.world
         bots = sorted(st.bots.items())
         return {
@@ -373,6 +374,7 @@ class GridServer(LockstepDoor[GridStepper]):
             "robots": {n: list(self.grid.cell(b.cell)) for n, b in bots},
             "moves": {n: b.moves for n, b in bots},
             "dropped": list(self.dropped),
+            "idle": sorted(self.idle_robots),
             "remaining": w.remaining,
             "delivered": w.delivered,
             "carried": sum(b.carried for _, b in bots),
