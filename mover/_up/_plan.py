@@ -69,6 +69,7 @@ class ProcessPlan:
     required: bool
     member: bool = True  # a team member (the router is not)
     ready_line: str | None = None
+    stage: int = 2  # started in this order, stopped in the reverse: router 0, world 1, members 2
 
 
 def members(plan: TeamPlan) -> int:
@@ -98,12 +99,12 @@ def processes(plan: TeamPlan, s: Seeds, run_dir: Path, *, port: int) -> list[Pro
                 required=True,
                 member=False,
                 ready_line="router ",
+                stage=0,
             )
         )
     if plan.world is not None:
-        found.append(
-            ProcessPlan(plan.world.name, world_argv(plan.world, s, run_dir), plan.world.required)
-        )
+        argv = world_argv(plan.world, s, run_dir)
+        found.append(ProcessPlan(plan.world.name, argv, plan.world.required, stage=1))
     found += [ProcessPlan(m.name, member_argv(m), m.required) for m in plan.members]
     return found
 

@@ -35,7 +35,7 @@ from .._config import NodeConfig, Team, free_port
 from .._node import Node
 from .._programs import PROGRESS_TOPIC, launch
 from ._plan import ProcessPlan, Seeds, processes, resolved, seeds, uses_router
-from ._teamfile import SUPERVISOR, TeamPlan
+from ._teamfile import MAX_WAIT, SUPERVISOR, TeamPlan
 
 _T = TypeVar("_T")
 
@@ -123,6 +123,7 @@ class Supervisor:
         self._stop = asyncio.Event()
         self._signals = 0
         self._tasks: set[asyncio.Task[Any]] = set()
+        self._width = 0
 
     # -- life ------------------------------------------------------------------------------------
 
@@ -146,6 +147,7 @@ class Supervisor:
 
     async def _start(self) -> None:
         procs = processes(self.plan, self.seeds, self.out, port=self.port)
+        self._width = max((len(p.name) for p in procs), default=0) + 2
         self.out.mkdir(parents=True, exist_ok=True)
         data = resolved(self.plan, self.seeds, procs, self.router)
         (self.out / "team.json").write_text(json.dumps(data, indent=2) + "\n")
@@ -170,7 +172,10 @@ class Supervisor:
             )
             rest = procs[1:]
         self.node = Node(SUPERVISOR, self.team, kind="tool", config=mine)
-        await self.node.open()
+        try:
+            await self.node.open()
+        except Exception as exc:  # a port taken, an endpoint refused: zenoh's words, one line
+            raise UpError(f"cannot join the team on {endpoint}: {exc}") from None
         for p in rest:
             await self._spawn(p, env)
 
@@ -211,7 +216,7 @@ class Supervisor:
     async def _watch(self, child: _Child) -> None:
         """Pump the child's lines until its output ends, then tell how it ended."""
         assert child.proc.stdout is not None
-        width = max(len(c.plan.name) for c in self.children)
+        prefix = f"[{child.plan.name}]".ljust(self._width)
         try:
             while True:
                 try:
@@ -227,7 +232,7 @@ class Supervisor:
                 if child.plan.ready_line and text.startswith(child.plan.ready_line):
                     child.said_ready.set()
                 if self.echo:
-                    print(f"[{child.plan.name:<{width}}] {text}", flush=True)
+                    print(f"{prefix} {text}", flush=True)
             code = await child.proc.wait()
         finally:
             child.log.close()
@@ -288,12 +293,13 @@ class Supervisor:
         """Wait (bounded by the file's ``ready_timeout``) until every process of the team is a
         member; return the seconds it took. Raises :class:`UpError` naming who is missing."""
         names = [c.plan.name for c in self.children if c.plan.member]
+        bound = self.plan.ready_timeout or min(MAX_WAIT, 30.0 + 2.0 * len(self.children))
         try:
-            await self.guard(self.node.team.wait_for(names, timeout=self.plan.ready_timeout))
+            await self.guard(self.node.team.wait_for(names, timeout=bound))
         except TimeoutError:
             missing = sorted(set(names) - self.node.team.members())
             raise UpError(
-                f"not ready within {self.plan.ready_timeout:g} s: {', '.join(missing)} "
+                f"not ready within {bound:g} s: {', '.join(missing)} "
                 f"did not join (see their logs in {self.out})"
             ) from None
         for c in self.children:
@@ -367,16 +373,17 @@ class Supervisor:
     # -- stopping ----------------------------------------------------------------------------------
 
     async def aclose(self) -> None:
-        """Stop every process (members first, the router last) and close the node; bounded by
-        ``STOP_GRACE + KILL_GRACE`` per stage."""
+        """Stop every process and close the node: the members first, then the world, then
+        (once this node has closed) the router; each stage bounded by ``STOP_GRACE + 2 *
+        KILL_GRACE``."""
         self._stop.set()  # from now on an exit is expected (a second Ctrl-C kills: _on_signal)
         t0 = time.monotonic()
-        members = [c for c in self.children if c.plan.member]
-        await _stop_all(members)
+        for stage in (2, 1):
+            await _stop_all([c for c in self.children if c.plan.stage == stage])
         if self.node is not None:
             with contextlib.suppress(Exception):
                 await self.node.close()
-        await _stop_all([c for c in self.children if not c.plan.member])
+        await _stop_all([c for c in self.children if c.plan.stage == 0])
         if self._tasks:
             await asyncio.wait(self._tasks, timeout=KILL_GRACE)
         if self.signals:

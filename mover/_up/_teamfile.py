@@ -105,7 +105,7 @@ class TeamPlan:
     topology: str = "auto"
     port: int | None = None  # None: a free port
     log_level: str | None = None
-    ready_timeout: float = 60.0
+    ready_timeout: float | None = None  # None: 30 s and 2 s a process (they start on few cores)
     world: WorldPlan | None = None
     members: tuple[MemberPlan, ...] = ()
     program: ProgramPlan | None = None
@@ -179,7 +179,7 @@ def _team(t: _Table) -> TeamPlan:
         topology=t.choice("topology", TOPOLOGIES) or "auto",
         port=t.integer("port", low=1, high=65535),
         log_level=level.upper() if level else None,
-        ready_timeout=t.number("ready_timeout", high=MAX_WAIT) or 60.0,
+        ready_timeout=t.number("ready_timeout", high=MAX_WAIT),
     )
 
 
