@@ -32,6 +32,7 @@ from types import TracebackType
 from typing import IO, Any, TypeVar
 
 from .._config import NodeConfig, Team, free_port
+from .._exceptions import MoverError
 from .._node import Node
 from .._programs import PROGRESS_TOPIC, launch
 from ._plan import ProcessPlan, Seeds, processes, resolved, seeds, uses_router
@@ -67,11 +68,12 @@ class UpError(Exception):
 class ProcessExited(UpError):
     """A process ended that the team cannot do without (or one ended before it was ready)."""
 
-    def __init__(self, name: str, code: int, last: list[str]) -> None:
-        self.name, self.code, self.last = name, code, last
+    def __init__(self, name: str, code: int, last: list[str], log: Path | None = None) -> None:
+        self.name, self.code, self.last, self.log = name, code, last, log
         how = f"was killed by signal {-code}" if code < 0 else f"exited with code {code}"
         said = last[-1] if last else "nothing"
-        super().__init__(f"the {name} process {how}; its last word: {said}")
+        where = f" (its log: {log})" if log is not None else ""
+        super().__init__(f"the {name} process {how}; its last word: {said}{where}")
 
 
 class Stopped(Exception):
@@ -87,7 +89,7 @@ class _Child:
         default_factory=lambda: collections.deque(maxlen=LAST_LINES)
     )
     said_ready: asyncio.Event = field(default_factory=asyncio.Event)
-    ready: bool = False
+    ready: bool = False  # seen serving: a member of the team, or its ready line said
 
 
 class Supervisor:
@@ -241,7 +243,8 @@ class Supervisor:
         what = f"exited with code {code}" if code >= 0 else f"was killed by signal {-code}"
         self.say(f"{child.plan.name} {what}")
         if child.plan.required or not child.ready:
-            self._fail(ProcessExited(child.plan.name, code, list(child.last)))
+            log = self.out / f"{child.plan.name}.log"
+            self._fail(ProcessExited(child.plan.name, code, list(child.last), log))
 
     def _fail(self, fault: UpError) -> None:
         if self._fault is not None and not self._fault.done():
@@ -352,6 +355,9 @@ class Supervisor:
         )
         try:
             outcomes = await self.launch(p.name, members, p.args, run=p.run)
+        except MoverError as exc:  # refused: an unknown program, bad arguments, a busy member
+            print(f"[{p.run}] not started: {type(exc).__name__}: {exc}", flush=True)
+            return False
         finally:
             await asyncio.sleep(0.1)  # the last progress reports
             shower.cancel()
@@ -363,6 +369,8 @@ class Supervisor:
             if "error" in outcome:
                 ok = False
                 print(f"[{p.run}] {member}: FAILED {outcome['error']}", flush=True)
+                for line in str(outcome.get("traceback") or "").rstrip().splitlines():
+                    print(f"[{p.run}]   {line}", flush=True)  # a bug in the program: where
             else:
                 result = json.dumps(outcome.get("result"), default=str)
                 print(f"[{p.run}] {member}: {result}", flush=True)
@@ -378,6 +386,11 @@ class Supervisor:
         KILL_GRACE``."""
         self._stop.set()  # from now on an exit is expected (a second Ctrl-C kills: _on_signal)
         t0 = time.monotonic()
+        # A process that is not serving yet may be importing, where SIGINT is a traceback:
+        # it gets SIGTERM (it has nothing to close yet).
+        team = self.node.team.members() if self.node is not None else frozenset()
+        for c in self.children:
+            c.ready = c.said_ready.is_set() or c.plan.name in team
         for stage in (2, 1):
             await _stop_all([c for c in self.children if c.plan.stage == stage])
         if self.node is not None:
@@ -402,7 +415,7 @@ async def _stop_all(children: list[_Child]) -> None:
         (signal.SIGKILL, KILL_GRACE),
     ):
         for c in alive:
-            _signal(c, sig)
+            _signal(c, sig if c.ready or sig != signal.SIGINT else signal.SIGTERM)
         if alive:
             await asyncio.wait([asyncio.ensure_future(c.proc.wait()) for c in alive], timeout=grace)
         alive = [c for c in alive if c.proc.returncode is None]

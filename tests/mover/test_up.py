@@ -203,3 +203,29 @@ async def test_the_foraging_team_file_runs_once_and_stops(tmp_path: Path) -> Non
     assert "[forage] ended after" in up.text
     assert await gone(up.pids(), 1.0) == []
     assert "Traceback" not in up.text
+
+
+DESKS = '[team]\nname = "desks"\n[[workstations]]\nprefix = "w"\ncount = 2\n'
+
+
+async def test_sigterm_stops_the_team_with_status_0(tmp_path: Path) -> None:
+    (tmp_path / "t.toml").write_text(DESKS)
+    up = await Up.start(tmp_path / "t.toml", "--out", str(tmp_path / "run"))
+    try:
+        await up.line("[up] ready in")
+    finally:
+        up.proc.terminate()
+    assert await up.ended() == 0, up.text
+    assert "[up] SIGTERM: stopping the team" in up.text
+    assert await gone(up.pids(), 1.0) == []
+    assert "Traceback" not in up.text
+
+
+async def test_a_run_that_fails_makes_exit_after_run_exit_1(tmp_path: Path) -> None:
+    program = '[program]\nname = "hello_team"\nmembers = ["w1", "w2"]\nargs = { bogus = 1 }\n'
+    (tmp_path / "t.toml").write_text(DESKS + program)
+    up = await Up.start(tmp_path / "t.toml", "--exit-after-run", "--out", str(tmp_path / "run"))
+    assert await up.ended() == 1, up.text
+    assert "[hello_team] not started: BadArguments:" in up.text
+    assert await gone(up.pids(), 1.0) == []
+    assert "Traceback" not in up.text
