@@ -8,11 +8,19 @@ Environment (read by ``from_env``): ``MOVER_TEAM``, ``MOVER_TEAM_KEY`` (hex) or
 ``MOVER_TEAM_KEY_FILE``; ``MOVER_MODE`` (peer | client), ``MOVER_LISTEN`` and ``MOVER_CONNECT``
 (comma-separated endpoints such as ``tcp/127.0.0.1:7447``), ``MOVER_ZENOH_CONFIG`` (a json5 file
 merged over the defaults, e.g. TLS settings written by ``mover router --gen-config``).
+
+Timeouts (read by ``from_env`` too; docs/transport.md says how the defaults were measured):
+``MOVER_LEASE_MS`` (a link silent this long is closed and its members leave; default 1000),
+``MOVER_KEEP_ALIVE`` (keep-alives sent per lease; default 4), ``MOVER_HELLO_TIMEOUT`` (seconds
+one hello question waits for its answer; default 5), ``MOVER_HELLO_RETRIES`` (unanswered hellos
+asked again, 0.2 s to 3 s apart; default 8) and ``MOVER_LEAVE_GRACE`` (seconds a member that left
+may take to come back before what it held is given up; default 1).
 """
 
 from __future__ import annotations
 
 import json
+import math
 import os
 import secrets
 import socket
@@ -27,6 +35,15 @@ from ._exceptions import ConfigError
 from ._keys import check_name
 
 MIN_KEY_BYTES = 16
+
+# name: (environment variable, smallest, largest) of each timeout knob of NodeConfig
+_KNOBS: dict[str, tuple[str, float, float]] = {
+    "lease_ms": ("MOVER_LEASE_MS", 100, 600_000),
+    "keep_alive": ("MOVER_KEEP_ALIVE", 1, 100),
+    "hello_timeout": ("MOVER_HELLO_TIMEOUT", 0.1, 600.0),
+    "hello_retries": ("MOVER_HELLO_RETRIES", 0, 100),
+    "leave_grace": ("MOVER_LEAVE_GRACE", 0.0, 600.0),
+}
 
 
 @dataclass(frozen=True)
@@ -76,7 +93,15 @@ class Team:
 
 @dataclass(frozen=True)
 class NodeConfig:
-    """Zenoh settings for one node."""
+    """Zenoh settings and membership timeouts for one node.
+
+    ``lease_ms``: a zenoh link that hears nothing for this long is closed, and the members
+    behind it leave (a SIGKILLed process is seen gone at once whatever the lease: its socket
+    closes). ``keep_alive``: keep-alives per lease. ``hello_timeout``, ``hello_retries``: how
+    long one hello question waits and how often an unanswered one is asked again before a token
+    holder is given up as unverified. ``leave_grace``: how long a member that left may take to
+    come back before what it held (its calls, its body in a world) is given up.
+    """
 
     mode: str = "peer"
     listen: tuple[str, ...] = ("tcp/127.0.0.1:0",)
@@ -85,6 +110,25 @@ class NodeConfig:
     lease_ms: int = 1000
     keep_alive: int = 4
     overrides: dict[str, Any] = field(default_factory=dict)
+    hello_timeout: float = 5.0
+    hello_retries: int = 8
+    leave_grace: float = 1.0
+
+    def __post_init__(self) -> None:
+        for name, (_, low, high) in _KNOBS.items():
+            value = getattr(self, name)
+            integral = isinstance(getattr(NodeConfig, name), int)
+            if (
+                isinstance(value, bool)
+                or not isinstance(value, int if integral else (int, float))
+                or not math.isfinite(value)
+                or not low <= value <= high
+            ):
+                kind = "an integer" if integral else "a number"
+                raise ConfigError(f"{name} must be {kind} from {low} to {high}, not {value!r}")
+        if self.lease_ms / self.keep_alive < 10:
+            every = f"{self.lease_ms}/{self.keep_alive}"
+            raise ConfigError(f"lease_ms / keep_alive must be at least 10 ms, not {every}")
 
     @classmethod
     def from_env(cls, connect: Sequence[str] = ()) -> NodeConfig:
@@ -110,15 +154,21 @@ class NodeConfig:
             listen=listen,
             connect=(endpoints("MOVER_CONNECT") or ()) + tuple(connect),
             overrides=overrides,
+            **_knobs_from_env(),
         )
 
     def env(self) -> dict[str, str]:
-        """Environment variables that give a child process these settings."""
-        return {
+        """Environment variables that give a child process these settings (the timeouts only
+        where they differ from the defaults, so that a parent's ``MOVER_*`` still reach it)."""
+        env = {
             "MOVER_MODE": self.mode,
             "MOVER_LISTEN": ",".join(self.listen),
             "MOVER_CONNECT": ",".join(self.connect),
         }
+        for name, (var, _, _) in _KNOBS.items():
+            if getattr(self, name) != getattr(NodeConfig, name):
+                env[var] = str(getattr(self, name))
+        return env
 
     def to_zenoh(self) -> zenoh.Config:
         """The zenoh configuration."""
@@ -142,6 +192,25 @@ class NodeConfig:
             except Exception as exc:
                 raise ConfigError(f"bad zenoh setting {key} = {value!r}: {exc}") from exc
         return conf
+
+
+def _knobs_from_env() -> dict[str, Any]:
+    """The timeout knobs set in the environment (ConfigError for one that is not a number)."""
+    found: dict[str, Any] = {}
+    for name, (var, low, high) in _KNOBS.items():
+        raw = os.environ.get(var)
+        if raw is None or not raw.strip():
+            continue
+        integral = isinstance(getattr(NodeConfig, name), int)
+        try:
+            value: float = int(raw) if integral else float(raw)
+        except ValueError:
+            kind = "an integer" if integral else "a number"
+            raise ConfigError(f"${var} must be {kind} from {low} to {high}, not {raw!r}") from None
+        if not (math.isfinite(value) and low <= value <= high):
+            raise ConfigError(f"${var} must be from {low} to {high}, not {raw!r}")
+        found[name] = value
+    return found
 
 
 def _read_overrides(path: str) -> dict[str, Any]:

@@ -28,7 +28,6 @@ if TYPE_CHECKING:
     from ._node import Node
 
 log = logging.getLogger("mover.team")
-_HELLO_RETRIES = 8  # unanswered hellos asked again, 0.2 s to 3 s apart
 
 
 @dataclass(frozen=True)
@@ -119,13 +118,16 @@ class Membership:
         """Call ``callback(name)`` on the loop whenever a member leaves."""
         self._on_leave.append(callback)
 
-    def on_gone(self, callback: Callable[[str], None], grace: float = 1.0) -> None:
-        """Call ``callback(name)`` when a member left and has not come back within ``grace`` s.
+    def on_gone(self, callback: Callable[[str], None], grace: float | None = None) -> None:
+        """Call ``callback(name)`` when a member left and has not come back within ``grace`` s
+        (default: the node's ``NodeConfig.leave_grace``).
 
         For giving up what a member held (its calls, its body in a world): a link that flaps
         makes a member leave and join again within moments, and it should lose nothing.
         """
         loop = asyncio.get_running_loop()
+        if grace is None:
+            grace = self._node.config.leave_grace
 
         def later(name: str) -> None:
             if name not in self._members:
@@ -205,7 +207,7 @@ class Membership:
         waiting = self._verifying.setdefault(name, [])
         waiting.append(future)
         if len(waiting) == 1 and node._session is not None:
-            self._hello(name, attempt=_HELLO_RETRIES, join=False)
+            self._hello(name, attempt=node.config.hello_retries, join=False)
         try:
             async with asyncio.timeout(timeout):
                 return await asyncio.shield(future)
@@ -225,7 +227,7 @@ class Membership:
         self._asked[name] = now
         while len(self._asked) > 4096:
             del self._asked[next(iter(self._asked))]
-        self._hello(name, attempt=_HELLO_RETRIES, join=False)
+        self._hello(name, attempt=self._node.config.hello_retries, join=False)
 
     def _open_hello(self, frame: bytes, name: str, challenge: bytes) -> tuple[Any, MemberInfo]:
         """The envelope and member info of an authentic hello answering ``challenge``."""
@@ -308,7 +310,7 @@ class Membership:
                 return
             if name not in self._tokens:
                 return
-            if attempt < _HELLO_RETRIES:
+            if attempt < node.config.hello_retries:
                 # No authentic answer (an overloaded machine, a link still coming up, or only
                 # a stranger's answer on the member's key): ask again later.
                 delay = min(0.2 * 2**attempt, 3.0)
@@ -327,7 +329,7 @@ class Membership:
             payload=challenge,
             target=zenoh.QueryTarget.ALL,  # a stranger's queryable cannot take it (see _rpc)
             consolidation=zenoh.ConsolidationMode.NONE,
-            timeout=5.0,
+            timeout=node.config.hello_timeout,
         )
 
     def on_hello_query(self, query: Any) -> None:
