@@ -2,7 +2,8 @@
 
 ``mover world WORLDFILE [--lockstep] [--speed X] [--seed N] [--record FILE]`` runs the world
 process: it joins the team from the environment (``MOVER_*``), exports ``join``/``step``/``leave``
-and streams snapshots on ``world/state``. ``mover replay FILE --out PNG`` draws a recording.
+and streams snapshots on ``world/state``. ``mover replay FILE`` plays a recording in the web viewer
+(``sim_hw.view``); ``mover replay FILE --out PNG`` draws it.
 """
 
 from __future__ import annotations
@@ -107,27 +108,43 @@ def run_world(args: argparse.Namespace) -> int:
 
 def register_replay(sub: Any) -> None:
     """Add ``replay`` to the ``mover`` command's sub-parsers."""
+    from sim_hw.view.cli import add_viewer_arguments
+
     p = sub.add_parser(
-        "replay", help="draw a recorded run's trajectories to a PNG", description=run_replay.__doc__
+        "replay",
+        help="play a recorded run in the web viewer, or draw it to a PNG",
+        description=run_replay.__doc__,
     )
     p.add_argument("file", metavar="FILE", help="a recording made with mover world --record")
-    p.add_argument("--out", required=True, metavar="PNG", help="the image to write")
+    p.add_argument(
+        "--out",
+        metavar="PNG|RRD",
+        help="write the trajectories to a .png, or the replay to a .rrd file, instead of "
+        "showing it",
+    )
+    add_viewer_arguments(p)
     p.set_defaults(func=run_replay)
 
 
 def run_replay(args: argparse.Namespace) -> int:
-    """Draw the arena and the trajectories of a recording."""
+    """Play a recording in the web viewer on its timeline (pause, scrub, speed); with --out, draw
+    the arena and the trajectories to a PNG, or save the replay as a .rrd file."""
     from ._record import plot_recording
 
     if not Path(args.file).is_file():
         raise UsageError(f"{args.file}: no such file")
-    if not str(args.out).endswith(".png"):
-        raise UsageError(f"--out must name a .png file, got {args.out!r}")
+    out = None if args.out is None else str(args.out)
+    if out is not None and not out.endswith((".png", ".rrd")):
+        raise UsageError(f"--out must name a .png or .rrd file, got {args.out!r}")
     try:
-        plot_recording(args.file, args.out)
+        if out is None or out.endswith(".rrd"):
+            from sim_hw.view.cli import replay
+
+            return replay(args.file, port=args.port, bind=args.bind, rrd=out)
+        plot_recording(args.file, out)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     except OSError as exc:
-        raise UsageError(f"cannot write {args.out}: {exc.strerror or exc}") from None
-    print(args.out)
+        raise UsageError(f"cannot write {out}: {exc.strerror or exc}") from None
+    print(out)
     return 0
