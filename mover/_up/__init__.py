@@ -39,12 +39,21 @@ __all__ = [
 ]
 
 
+DESCRIPTION = (
+    "Start the team a team file describes (a zenoh router when the team is large, the world, "
+    "robot and workstation groups), wait until every process is a member, start its program, "
+    "and keep the team up until Ctrl-C or SIGTERM (exit 0) or until a required process exits "
+    "(exit 1). One log per process, the file as run (team.json, with its seeds) and, for a "
+    "fresh key, team.key go to the run folder."
+)
+
+
 def register(sub: Any) -> None:
     """Add ``mover up``."""
     p = sub.add_parser(
         "up",
         help="start a team from a team file and keep it running",
-        description=__doc__.split("\n\n")[1],
+        description=DESCRIPTION,
     )
     add_arguments(p)
     p.set_defaults(func=run)

@@ -6,12 +6,12 @@ import argparse
 import sys
 
 from ..cli import UsageError, add_log_arguments, setup_logging
-from . import add_arguments, run
+from . import DESCRIPTION, add_arguments, run
 
 
 def main() -> int:
     """``mover up`` as its own command."""
-    p = argparse.ArgumentParser(prog="python -m mover._up", description="start a team file")
+    p = argparse.ArgumentParser(prog="python -m mover._up", description=DESCRIPTION)
     add_arguments(p)
     add_log_arguments(p)
     args = p.parse_args()

@@ -150,14 +150,19 @@ class Supervisor:
     async def _start(self) -> None:
         procs = processes(self.plan, self.seeds, self.out, port=self.port)
         self._width = max((len(p.name) for p in procs), default=0) + 2
-        self.out.mkdir(parents=True, exist_ok=True)
         data = resolved(self.plan, self.seeds, procs, self.router)
-        (self.out / "team.json").write_text(json.dumps(data, indent=2) + "\n")
-        if self.key_source == "fresh":  # so that a terminal of one's own can join the team
-            key = self.out / "team.key"
-            key.touch(mode=0o600)
-            key.write_text(self.team.key.hex() + "\n")
-            self.key_source = f"fresh, in {key}"
+        try:
+            self.out.mkdir(parents=True, exist_ok=True)
+            (self.out / "team.json").write_text(json.dumps(data, indent=2) + "\n")
+            if self.key_source == "fresh":  # so that a terminal of one's own can join the team
+                key = self.out / "team.key"
+                key.touch(mode=0o600)
+                key.write_text(self.team.key.hex() + "\n")
+                self.key_source = f"fresh, in {key}"
+        except OSError as exc:
+            raise UpError(
+                f"cannot write the run folder {self.out}: {exc.strerror or exc}"
+            ) from None
         endpoint = f"tcp/127.0.0.1:{self.port}"
         if self.router:
             mine = NodeConfig(mode="client", listen=(), connect=(endpoint,))
@@ -182,7 +187,9 @@ class Supervisor:
             await self._spawn(p, env)
 
     def _env(self, config: NodeConfig) -> dict[str, str]:
-        env = {k: v for k, v in os.environ.items() if k != "MOVER_TEAM_KEY_FILE"}
+        # the team's own key and endpoints, not those of a team this shell may be set up for
+        dropped = ("MOVER_TEAM_KEY_FILE", "MOVER_ZENOH_CONFIG")
+        env = {k: v for k, v in os.environ.items() if k not in dropped}
         level = self.log_level or "WARNING"
         return {
             **env,
@@ -223,8 +230,8 @@ class Supervisor:
             while True:
                 try:
                     raw = await child.proc.stdout.readline()
-                except ValueError:  # a line longer than MAX_LINE: take what came
-                    raw = await child.proc.stdout.read(MAX_LINE) + b"\n"
+                except ValueError:  # a line longer than MAX_LINE (asyncio drops it)
+                    raw = f"(a line over {MAX_LINE} bytes, dropped)\n".encode()
                 if not raw:
                     break
                 child.log.write(raw)
