@@ -172,16 +172,21 @@ async def test_the_world_rejecting_its_file_fails_mover_up_at_once(tmp_path: Pat
     assert "Traceback" not in up.text
 
 
-async def test_a_router_topology_and_no_orphans_when_mover_up_is_killed(tmp_path: Path) -> None:
+async def test_a_large_team_runs_behind_a_router_and_leaves_no_orphan_when_killed(
+    tmp_path: Path,
+) -> None:
+    """Twelve workstations and mover up itself: 13 members, over PEER_MESH_MAX (12)."""
     (tmp_path / "t.toml").write_text(
-        '[team]\nname = "hub"\ntopology = "router"\n[[workstations]]\nprefix = "w"\ncount = 2\n'
+        '[team]\nname = "hub"\n[[workstations]]\nprefix = "w"\ncount = 12\n'
     )
     up = await Up.start(tmp_path / "t.toml", "--out", str(tmp_path / "run"))
     try:
         await up.line("[up] ready in")
         pids = up.pids()
-        assert set(pids) == {"router", "w1", "w2"}, up.text
-        assert "router on 127.0.0.1" in up.text
+        assert set(pids) == {"router", *(f"w{i}" for i in range(1, 13))}, up.text
+        assert "; router on 127.0.0.1:" in up.text
+        team = json.loads((tmp_path / "run" / "team.json").read_text())
+        assert team["topology"] == "router"
         up.proc.kill()  # no chance to stop anyone: the children must notice by themselves
         await up.ended()
     finally:
