@@ -27,7 +27,7 @@ from ._lines import Path as KeyPath
 MAX_FILE_BYTES = 2**20
 """The largest team file read."""
 MAX_PROCESSES = 200
-"""The most processes one team file may start (router and world included)."""
+"""The most processes one team file may start (the world included; a router is one more)."""
 MAX_SEED = 2**63 - 1
 """Seeds are whole numbers from 0 to this."""
 MAX_WAIT = 600.0
@@ -146,7 +146,7 @@ def parse_team(text: str, path: Path) -> TeamPlan:
     team = root.table("team")
     if team is None:
         raise root.fail((), 'needs a [team] table (at least: name = "...")')
-    plan = _team(team)
+    plan = _team(team, path)
     world = root.table("world")
     wplan = _world(world) if world is not None else None
     members = _groups(root, wplan)
@@ -159,20 +159,20 @@ def parse_team(text: str, path: Path) -> TeamPlan:
         joining = HARDWARE_OF[wplan.kind]
         expect = sum(m.hardware == joining and m.world == wplan.name for m in members)
         wplan = replace(wplan, expect=expect)
-    return replace(plan, source=path, world=wplan, members=tuple(members), program=pplan)
+    return replace(plan, world=wplan, members=tuple(members), program=pplan)
 
 
 # -- the sections ------------------------------------------------------------------------------
 
 
-def _team(t: _Table) -> TeamPlan:
+def _team(t: _Table, path: Path) -> TeamPlan:
     t.only(("name", "key_file", "seed", "topology", "port", "log_level", "ready_timeout"))
     key_file = t.string("key_file")
     level = t.string("log_level")
     if level is not None and level.upper() not in ("DEBUG", "INFO", "WARNING", "ERROR"):
         raise t.fail(("log_level",), f"must be DEBUG, INFO, WARNING or ERROR, got {level!r}")
     return TeamPlan(
-        source=t.ctx.base,
+        source=path,
         name=t.name("name", required=True) or "",
         key_file=t.ctx.path(key_file) if key_file is not None else None,
         seed=t.integer("seed", high=MAX_SEED),
