@@ -13,6 +13,10 @@ import sys
 import time
 from pathlib import Path
 
+import pytest
+
+from mover._up import _supervisor
+from mover._up._plan import ProcessPlan
 from tests.helpers.procs import ROOT
 
 WORLD = ROOT / "worlds" / "search_and_rescue.toml"
@@ -234,3 +238,29 @@ async def test_a_run_that_fails_makes_exit_after_run_exit_1(tmp_path: Path) -> N
     assert "[hello_team] not started: BadArguments:" in up.text
     assert await gone(up.pids(), 1.0) == []
     assert "Traceback" not in up.text
+
+
+async def test_a_process_that_ignores_sigint_and_sigterm_is_killed_after_the_bounds(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(_supervisor, "STOP_GRACE", 0.3)
+    monkeypatch.setattr(_supervisor, "KILL_GRACE", 0.3)
+    stubborn = (
+        "import signal, sys, time\n"
+        "signal.signal(signal.SIGINT, signal.SIG_IGN)\n"
+        "signal.signal(signal.SIGTERM, signal.SIG_IGN)\n"
+        "print('READY', flush=True)\n"
+        "time.sleep(60)\n"
+    )
+    plan = ProcessPlan("stubborn", (sys.executable, "-c", stubborn), required=False)
+    proc = await asyncio.create_subprocess_exec(
+        *plan.argv, stdout=asyncio.subprocess.PIPE, start_new_session=True
+    )
+    assert proc.stdout is not None
+    assert await asyncio.wait_for(proc.stdout.readline(), 20) == b"READY\n"
+    with (tmp_path / "log").open("ab") as log:
+        child = _supervisor._Child(plan, proc, log, ready=True)
+        t0 = time.monotonic()
+        await _supervisor._stop_all([child])
+    assert proc.returncode == -signal.SIGKILL
+    assert 0.6 <= time.monotonic() - t0 < 5
