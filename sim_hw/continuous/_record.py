@@ -205,8 +205,9 @@ def draw_recording(header: Mapping[str, Any], ticks: Sequence[Mapping[str, Any]]
         ax.annotate(mk["id"], mk["center"], fontsize=7, ha="center", va="center")
     robots = _tracks(ticks, "robots")
     boxes = _tracks(ticks, "boxes")
-    colours = track_colours(robots)
-    spare = PALETTE[len(colours) % len(PALETTE) :] + PALETTE
+    known = {k for k in header.get("radii", {}) if k != "*"}  # the world file's: as the viewer
+    colours = {r: c for r, c in track_colours(known | robots.keys()).items() if r in robots}
+    spare = PALETTE[len(known | robots.keys()) % len(PALETTE) :] + PALETTE
     colours.update({b: spare[i % len(spare)] for i, b in enumerate(sorted(boxes))})
     sizes = {b["id"]: b["size"] for b in header.get("boxes", [])}
     labelled = len(robots) + len(boxes) <= 12
