@@ -198,10 +198,15 @@ class _Seen:
         async for m in progress:
             data = dict(m.data)
             member, phase = data.pop("member", "?"), data.pop("phase", "?")
+            # the member's own simulated time, when its report carries one; else the world's
+            # last snapshot here (which races the report by a snapshot or so)
+            sim = data.pop("t", None)
+            sim = float(sim) if isinstance(sim, int | float) else self.sim
             now = time.monotonic() - self.wall0
-            self.phases.setdefault(phase, [now, self.sim])
+            first = self.phases.setdefault(phase, [now, sim])
+            first[1] = min(first[1], sim)  # the earliest member, whichever report came first
             extra = " ".join(f"{k}={_fmt(v)}" for k, v in data.items())
-            line = f"[{now:5.1f}s | sim {self.sim:6.1f}s] {member}: {phase} {extra}"
+            line = f"[{now:5.1f}s | sim {sim:6.1f}s] {member}: {phase} {extra}"
             print(line.rstrip(), flush=True)
 
 
