@@ -91,3 +91,23 @@ def test_bad_flags_are_one_line(
     assert code == 2
     err = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
     assert len([ln for ln in err if says in ln]) == 1, err
+
+
+async def test_view_draws_a_grid_world_from_its_frames(tmp_path: Path) -> None:
+    from rerun.chunk import RrdReader
+
+    grid = tmp_path / "g.txt"
+    grid.write_text("#######\n#B...R#\n#.#...#\n#######\n")
+    rrd = tmp_path / "grid.rrd"
+    async with cluster(cwd=ROOT) as c, c.launcher():
+        await c.start("mover._cli", "gridworld", str(grid), ready="READY")
+        view = await c.start(
+            "mover._cli", "view", "--port", str(free_port()), "--record", str(rrd), ready=None
+        )
+        line = await expect_line(view, "showing world")
+        assert line == f"mover view: showing world 'gridworld' (grid, grid), recording to {rrd}"
+        await asyncio.sleep(1.0)  # a few frames asked for
+        view.send_signal(signal.SIGINT)
+        assert await asyncio.wait_for(view.wait(), 30) == 0
+    paths = {chunk.entity_path for chunk in RrdReader(rrd).stream().to_chunks()}
+    assert {"/arena", "/grid/cells", "/robots"} <= paths
