@@ -25,7 +25,14 @@ Choices the paper leaves open, taken here:
   ``same_eyebot`` metres of where it heard that one are taken for it;
 * random movement turns by a uniform angle in [-π, π) and drives a uniform distance in
   [0.5, ``d``] metres;
-* while avoiding, the distance driven counts towards ``d``.
+* every leg (following, seeking, random) is given up after twice the time it should take
+  (a wall in the way): a seek leg that reached no eye-bot is followed by a random one, so
+  that an eye-bot seen behind a wall does not hold the foot-bot there;
+* while avoiding, the distance driven counts towards ``d``. Avoiding is reactive: with an
+  obstacle within ±π/2 of its heading (closer than the proximity threshold) the foot-bot turns
+  away from it, the same way until it is clear (turning towards whichever side is freer at
+  each step makes it rock in front of a wall for ever), and then drives ``escape`` metres
+  straight on before it turns back to its way. An obstacle behind it is not avoided.
 """
 
 from __future__ import annotations
@@ -104,6 +111,8 @@ class Motion:
     turn_rate: float = 1.5
     aligned: float = 0.15  # radians: drive only once the heading is this close
     same_eyebot: float = 1.0
+    escape: float = 0.3  # metres driven straight on once an obstacle is no longer ahead
+    dt: float = 0.1  # seconds between two steps
 
 
 class FootBot:
@@ -117,7 +126,9 @@ class FootBot:
         self.motion = motion or Motion()
         self.mode = Mode.RANDOM
         self.heading: float | None = None  # the heading it drives (odometry frame)
-        self.left = 0.0  # metres still to drive in this mode
+        self.left = 0.0  # metres still to drive in this leg
+        self.patience = 0  # steps this leg may still take (a leg blocked by a wall ends)
+        self.may_seek = True  # False after a seek leg that reached no eye-bot: a random leg
         self.source: str | None = None  # the eye-bot it last took an instruction from
         self.received: float | None = None  # the direction it last received from it
         self.reference: float | None = None  # the direction received from the one before
@@ -126,22 +137,30 @@ class FootBot:
         self.backward = False  # it follows a backward instruction
         self.trips = 0  # goals reached
         self._last: Point | None = None
+        self._turning = 0.0  # the way it turns while an obstacle is ahead (kept until clear)
+        self._escape = 0.0  # metres still to drive straight after an obstacle
 
     def step(self, seen: FootPerception) -> FootCommand:
         """Sense, decide, command."""
         pose = seen.pose
         if self._last is not None:
-            self.left -= distance(self._last, pose[:2])
+            moved = distance(self._last, pose[:2])
+            self.left -= moved
+            self._escape -= moved
         self._last = pose[:2]
+        self.patience -= 1
         self._goal_reached(seen)
         if seen.heard is not None:
             self._hear(seen.heard, pose)
-        if self.left <= 0.0 and self.mode is Mode.FOLLOW:
-            self.mode = Mode.SEEK
+        if self.mode is Mode.FOLLOW and self._leg_over():
+            self.mode, self.may_seek = Mode.SEEK, True
         if self.mode is not Mode.FOLLOW:
             self._wander(seen)
-        if seen.obstacle is not None:
+        if seen.obstacle is not None and abs(seen.obstacle) < math.pi / 2:
             return self._avoid(seen.obstacle)
+        self._turning = 0.0
+        if self._escape > 0.0:  # clear of it: away a little before turning back to the way
+            return FootCommand(self.motion.speed, 0.0, None, False)
         return self._drive(pose)
 
     # -- decisions -------------------------------------------------------------------------------
@@ -163,21 +182,34 @@ class FootBot:
         direction = heard.direction(self.goal, pose)
         self.received = direction
         forward = self.reference is None or abs(wrap(direction - self.reference)) < math.pi / 2
-        self.mode, self.heading, self.left = Mode.FOLLOW, direction, self.motion.d
+        self._leg(Mode.FOLLOW, direction, self.motion.d)
         self.last_heard_at = pose[:2]
         self.backward, self.locked = not forward, forward
 
     def _wander(self, seen: FootPerception) -> None:
-        """No instruction to follow: head for the closest eye-bot in view, else at random."""
-        pose = seen.pose
-        target = self._closest_eyebot(seen)
-        if target is not None:
-            self.mode, self.heading, self.left = Mode.SEEK, wrap(pose[2] + target[1]), target[0]
+        """No instruction to follow: head for the closest eye-bot in view, else at random; a
+        seek leg that reaches no eye-bot (a wall between) is followed by a random one."""
+        if not self._leg_over():
             return
-        if self.mode is not Mode.RANDOM or self.left <= 0.0:
-            self.mode = Mode.RANDOM
-            self.heading = wrap(pose[2] + float(self.rng.uniform(-math.pi, math.pi)))
-            self.left = float(self.rng.uniform(min(0.5, self.motion.d), self.motion.d))
+        pose = seen.pose
+        target = self._closest_eyebot(seen) if self.mode is not Mode.SEEK or self.may_seek else None
+        if target is not None:
+            self._leg(Mode.SEEK, wrap(pose[2] + target[1]), target[0])
+            self.may_seek = False
+            return
+        turn = float(self.rng.uniform(-math.pi, math.pi))
+        self._leg(Mode.RANDOM, wrap(pose[2] + turn), float(self.rng.uniform(0.5, self.motion.d)))
+        self.may_seek = True
+
+    def _leg(self, mode: Mode, heading: float, length: float) -> None:
+        """Start driving ``length`` metres towards ``heading``; the leg is given up after twice
+        the time it should take (plus the time to turn round)."""
+        m = self.motion
+        self.mode, self.heading, self.left = mode, heading, length
+        self.patience = math.ceil((2.0 * length / m.speed + math.pi / m.turn_rate) / m.dt)
+
+    def _leg_over(self) -> bool:
+        return self.left <= 0.0 or self.patience <= 0
 
     def _closest_eyebot(self, seen: FootPerception) -> tuple[float, float] | None:
         pose = seen.pose
@@ -206,6 +238,8 @@ class FootBot:
 
     def _avoid(self, obstacle: float) -> FootCommand:
         m = self.motion
-        w = -m.turn_rate if obstacle >= 0.0 else m.turn_rate  # turn away from it
+        if self._turning == 0.0:  # turn away from it, and keep that way until clear
+            self._turning = -1.0 if obstacle >= 0.0 else 1.0
+        self._escape = m.escape
         v = 0.0 if abs(obstacle) < math.pi / 4 else 0.5 * m.speed
-        return FootCommand(v, w, None, True)
+        return FootCommand(v, self._turning * m.turn_rate, None, True)

@@ -90,8 +90,19 @@ def test_obstacles_are_avoided_with_the_beacon_saying_so() -> None:
     bot.step(FootPerception(pose=(0, 0, 0), heard=_heard("e1", 0.0)))
     cmd = bot.step(FootPerception(pose=(0.1, 0, 0), obstacle=0.3))  # ahead, a little left
     assert cmd.avoiding and cmd.front is None and cmd.w < 0 and cmd.v == 0.0
-    cmd = bot.step(FootPerception(pose=(0.1, 0, 0), obstacle=-1.2))  # right side: turn left
+    # it keeps turning the same way while the obstacle is ahead, even seen on the other side
+    cmd = bot.step(FootPerception(pose=(0.1, 0, -0.4), obstacle=-0.1))
+    assert cmd.avoiding and cmd.w < 0
+    # clear: straight on for a moment, LEDs plain and off, then back to its way (east)
+    cmd = bot.step(FootPerception(pose=(0.1, 0, -0.8)))
+    assert (cmd.v, cmd.w, cmd.avoiding, cmd.front) == (0.3, 0.0, False, None)
+    cmd = bot.step(FootPerception(pose=(0.5, -0.3, -0.8)))
+    assert cmd.w > 0 and cmd.front is Goal.TARGET
+    other = _bot()
+    cmd = other.step(FootPerception(pose=(0, 0, 0), obstacle=-1.2))  # right side: turn left
     assert cmd.avoiding and cmd.w > 0 and cmd.v > 0
+    cmd = other.step(FootPerception(pose=(0, 0, 0), obstacle=2.5))  # behind: not avoided
+    assert not cmd.avoiding
 
 
 def test_reaching_the_goal_turns_it_over_and_forgets_the_way() -> None:

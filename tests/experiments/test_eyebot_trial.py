@@ -1,0 +1,51 @@
+"""Stigmergic navigation in-process: the arenas, and seeded runs of the eye-bots and foot-bots."""
+
+import math
+
+import pytest
+
+from experiments.eyebot._arena import SPACING, cluttered, corridors
+from experiments.eyebot._trial import Settings, run
+
+
+def test_the_cluttered_arena_has_a_way_through_its_eye_bots() -> None:
+    arena = cluttered()
+    assert len(arena.eyebots) == 28
+    ids = {e.id: e.center for e in arena.eyebots}
+    # every lattice neighbour lies in one of the 12 directions
+    for a in ids.values():
+        for b in ids.values():
+            if a != b and math.dist(a, b) < SPACING + 1e-6:
+                angle = math.degrees(math.atan2(b[1] - a[1], b[0] - a[0]))
+                assert round(angle) % 30 == 0
+    assert arena.in_target(*arena.target) and arena.in_source(*arena.source)
+    assert not arena.in_source(*arena.target)
+
+
+@pytest.mark.parametrize("ratio", [1.0, 2.0])
+def test_the_double_corridor_has_eye_bots_along_both_corridors(ratio: float) -> None:
+    arena = corridors(ratio)
+    assert arena.corridors is not None
+    divide, y0, y1 = arena.corridors
+    inside = [e.center for e in arena.eyebots if y0 < e.center[1] < y1]
+    right = [c for c in inside if c[0] > divide]
+    left = [c for c in inside if c[0] < divide]
+    assert len(right) == 10
+    assert len(left) == pytest.approx(10 * ratio, abs=1)
+
+
+def test_eye_bots_showing_the_shortest_way_guide_a_foot_bot_near_the_optimum() -> None:
+    figures = run(cluttered(), Settings(footbots=1, duration=200.0, shortest=True), seed=3)
+    # the way through the eye-bots is 16 m: 53 s at 0.3 m/s, plus the ends in the areas
+    assert figures["t_1"] is not None and 45.0 < figures["t_1"] < 90.0
+    assert figures["trips"] >= 2
+    assert figures["t_a"] is not None and figures["t_a"] < 90.0
+
+
+def test_a_run_is_the_same_for_the_same_seed() -> None:
+    settings = Settings(footbots=3, duration=60.0)
+    a, b = run(cluttered(), settings, seed=5), run(cluttered(), settings, seed=5)
+    for key in ("t_1", "t_a", "trips"):
+        assert a[key] == b[key]
+    c = run(corridors(1.0), Settings(footbots=2, duration=60.0, window=30.0), seed=5)
+    assert c["c_r"] + c["c_l"] > 0  # foot-bots were counted in the corridors
