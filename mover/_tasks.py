@@ -15,6 +15,35 @@ one broadcast. The others' operations are then cancelled (their ``finally`` bloc
 stop). Messages per step: n+1 for a short step (a claim, its answer, n-1 deliveries of the
 announcement), 2n for a long one (n-1 questions and answers, the claim and its answer).
 
+OR in simulated time (the team has a :class:`RunClock`, every member of the run has one: see
+:meth:`TaskTeam.begin`). A lock-step world's time is the same on every member, and the first to
+finish in that time should win, whatever order the claims arrive in. A claim carries its finish
+time (``clock.now()`` as the operation returned). The designated member then asks each live
+member that has not claimed, ``mover.or_passed(run, step, t)`` with ``t`` the earliest claimed
+time, for proof that it went past ``t``: the member answers once its operation for the step
+finished (with its finish time: its claim is on its way), or its clock passed ``t``
+(``clock.passed``), or at once if its operation failed or the run ended here (it will never
+claim); a member that has not reached the step yet answers once it has. The designated member
+decides when every live member has claimed or shown it went past the earliest claimed time:
+the winner is the earliest finish time, ties going to the first member by name. A member that
+leaves meanwhile is handled as in any step (``MemberLost``, or survived). The decision reaches
+the members as above. Messages: a claim and its answer, one question and its answer per other
+member, the announcement: 3n - 1 for a short step (3(n - 1) when the designated member is the
+winner), up to 4n - 2 for a long one (the polls add theirs; a member that finishes before the
+decision adds a claim). Without a clock the wall-clock rule above holds, at its cost.
+A member waiting for the decision must keep its hardware ticking (``hw.clock.ticking()``), or a
+lock-step world holds still and the others never pass the claimed time.
+
+Beginning (:meth:`TaskTeam.begin`, a step of kind ``"begin"``, which every run hosted by
+:class:`~mover.ProgramHost` starts with): an AND barrier in which each member reports its
+clock's time, so that all start on the same tick; the members learn whether every one of them
+has a clock (then their ORs are decided in simulated time), and a spread of start times is
+logged as a warning. Cost: 2(n - 1) messages.
+
+Randomness: :attr:`TaskTeam.seed` (given at launch, else derived from the run's name) and
+:meth:`TaskTeam.rng`, one generator per (seed, member, stream), so that the same seed gives the
+same choices on every run whatever the run is called.
+
 AND, designated variant (section 4.4): each member sends its result to the designated member and
 gets everybody's results in the reply, once all have finished: 2(n-1) messages.
 AND, all-to-all: each member sends its result to every other member: 2n(n-1) messages.
@@ -33,13 +62,24 @@ taking over waits until every live member has re-joined, which covers the common
 from __future__ import annotations
 
 import asyncio
+import hashlib
 import logging
+import math
+import random
 import time
+from collections import deque
 from collections.abc import Awaitable, Callable, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Any, Literal, Protocol
 
-from ._exceptions import MemberLost, NotDelivered, WireError
+from ._exceptions import (
+    Answered,
+    CallTimeout,
+    MemberLost,
+    NotDelivered,
+    RemoteError,
+    WireError,
+)
 
 if TYPE_CHECKING:
     from ._node import Node
@@ -52,6 +92,38 @@ DECIDED_TOPIC = "mover/decided"
 LOST_GRACE = 0.5  # seconds a member must stay gone (while this node is linked) to be lost
 CALL_TIMEOUT = 30.0  # seconds a collective's call waits before it is asked again
 POLL_AFTER = 0.2  # seconds an OR member waits for the announced decision before polling
+SEED_LIMIT = 2**63  # seeds are 0 <= seed < SEED_LIMIT (they travel as msgpack integers)
+
+
+class RunClock(Protocol):
+    """What a host's hardware offers for reproducible runs: its simulated time.
+
+    ``ProgramHost.clock`` is one (or None: a workstation, or no hardware yet); the robot process
+    sets it as an adapter over its hardware's clock and its idle task. A run engages it when it
+    starts and releases it when the last run on the host ends.
+    """
+
+    def now(self) -> float:
+        """Simulated time of the last readings."""
+        ...
+
+    async def passed(self, t: float) -> None:
+        """Return once this robot has handed in a command for a tick whose time is after ``t``
+        (at once if it already has)."""
+        ...
+
+    async def engage(self) -> None:
+        """Stop idling: on return the world waits for this robot's commands."""
+        ...
+
+    def release(self) -> None:
+        """No run drives the hardware any more: idle again."""
+        ...
+
+
+def seed_of(run: str) -> int:
+    """The default seed of run ``run``: derived from its name (the same name, the same seed)."""
+    return int.from_bytes(hashlib.sha256(run.encode()).digest()[:4], "big")
 
 
 @dataclass(frozen=True)
@@ -123,11 +195,45 @@ class Decision:
         raise WireError(f"not a decision: {value!r:.80}")
 
 
+class _LocalOp:
+    """This member's operation in an OR step, for the designated member's ``or_passed``."""
+
+    def __init__(self, clock: RunClock, operation: Callable[[], Awaitable[Any]]) -> None:
+        self.clock = clock
+        self.finished_at: float | None = None  # simulated time the operation returned at
+        self.op: asyncio.Future[Any] = asyncio.ensure_future(self._run(operation))
+
+    async def _run(self, operation: Callable[[], Awaitable[Any]]) -> Any:
+        result = await operation()
+        self.finished_at = self.clock.now()  # as it returns: no loop turn in between
+        return result
+
+    async def passed(self, t: float) -> dict[str, Any]:
+        """Once the operation finished or the clock passed ``t``: which (see or_passed)."""
+        if self.finished_at is None and not self.op.done():
+            waiter = asyncio.ensure_future(self.clock.passed(t))
+            try:
+                await asyncio.wait({self.op, waiter}, return_when=asyncio.FIRST_COMPLETED)
+            finally:
+                waiter.cancel()
+                await asyncio.gather(waiter, return_exceptions=True)
+            lost = waiter.done() and not waiter.cancelled() and waiter.exception() is not None
+            if lost and self.finished_at is None:
+                return {"out": True}  # the hardware went away: this run will not claim
+        if self.finished_at is not None:
+            return {"finished": self.finished_at}
+        if self.op.done():
+            return {"out": True}  # failed or cancelled: it will never claim
+        return {"passed": self.clock.now()}
+
+
 @dataclass
 class _Step:
     members: frozenset[str]
+    run: str = ""
+    step: int = 0
     joined: set[str] = field(default_factory=set)
-    claims: list[tuple[str, Any]] = field(default_factory=list)
+    claims: list[tuple[str, Any, float | None]] = field(default_factory=list)
     results: dict[str, Any] = field(default_factory=dict)
     decision: asyncio.Future[Decision] = field(
         default_factory=lambda: asyncio.get_running_loop().create_future()
@@ -136,6 +242,12 @@ class _Step:
     lost: list[str] = field(default_factory=list)  # members already gone when it took over
     announced: int = 0  # deliveries of the OR decision's broadcast (n-1, or 0 if none was sent)
     told: bool = False  # the OR decision was announced (or needed no announcement)
+    timed: bool = False  # an OR decided in simulated time (its claims carry finish times)
+    beyond: dict[str, float] = field(default_factory=dict)  # member: a time it went past
+    finished: dict[str, float] = field(default_factory=dict)  # member: its answered finish
+    asking: dict[str, asyncio.Task[None]] = field(default_factory=dict)  # or_passed under way
+    questions: int = 0  # or_passed calls sent from here (two messages each)
+    gone: set[str] = field(default_factory=set)  # members lost during the step (on_gone)
 
 
 class Collectives:
@@ -147,10 +259,14 @@ class Collectives:
         self._steps: dict[tuple[str, int], _Step] = {}
         # OR decisions as announced by designated members (one broadcast per step)
         self._heard: dict[tuple[str, int], asyncio.Future[Decision]] = {}
+        # this member's OR operations, by step, once reached (None: not timed), for or_passed
+        self._local: dict[tuple[str, int], asyncio.Future[_LocalOp | None]] = {}
+        self._ended: deque[str] = deque(maxlen=_STEP_MEMORY)  # runs that ended here
         self._announcements = node.subscribe(DECIDED_TOPIC)
         self._listener = asyncio.get_running_loop().create_task(self._listen())
         node.export(self.or_join, "mover.or_join")
         node.export(self.or_claim, "mover.or_claim")
+        node.export(self.or_passed, "mover.or_passed")
         node.export(self.and_done, "mover.and_done")
         node.export(self.and_put, "mover.and_put")
         # Only a member gone for LOST_GRACE counts as lost: when a router restarts, every
@@ -161,9 +277,10 @@ class Collectives:
         key = (run, step)
         state = self._steps.get(key)
         if state is None:
-            state = self._steps[key] = _Step(frozenset(members))
+            state = self._steps[key] = _Step(frozenset(members), run, step)
             if kind == "or":
                 state.decision.add_done_callback(lambda _: self._announce(run, step, state))
+                state.decision.add_done_callback(lambda _: _cancel_all(state.asking))
             state.lost = [m for m in members if m < self.node.name and m not in self.node.team]
             state.takeover = bool(state.lost)
             heard = self._heard.get(key)
@@ -243,6 +360,93 @@ class Collectives:
             self._announce(run, step, state)  # now, if its callback has not run yet
         return state.announced
 
+    def sent(self, run: str, step: int) -> int:
+        """Messages OR step ``(run, step)`` cost from here as its designated member: the
+        announcement's deliveries and the ``or_passed`` questions with their answers."""
+        state = self._steps.get((run, step))
+        return self.announced(run, step) + (2 * state.questions if state is not None else 0)
+
+    # -- this member's operations, for a designated member's or_passed ---------------------
+
+    def _reaching(self, run: str, step: int) -> asyncio.Future[_LocalOp | None]:
+        future = self._local.get((run, step))
+        if future is None:
+            future = self._local[(run, step)] = asyncio.get_running_loop().create_future()
+            while len(self._local) > _STEP_MEMORY:
+                old = self._local.pop(next(iter(self._local)))
+                if not old.done():
+                    old.set_result(None)
+        return future
+
+    def reached(self, run: str, step: int, local: _LocalOp | None) -> None:
+        """This member started its operation of OR step ``(run, step)`` (None: untimed)."""
+        future = self._reaching(run, step)
+        if not future.done():
+            future.set_result(local)
+
+    def end_run(self, run: str) -> None:
+        """Run ``run`` ended here: questions about its steps are answered "out" from now on."""
+        self._ended.append(run)
+        for (r, _), future in list(self._local.items()):
+            if r == run and not future.done():
+                future.set_result(None)
+
+    async def or_passed(self, run: str, step: int, t: float) -> dict[str, Any]:
+        """The designated member asks whether this member went past simulated time ``t`` in
+        OR step ``(run, step)``. Answers ``{"finished": time}`` once the operation finished (its
+        claim is on its way), ``{"passed": now}`` once the clock passed ``t``, ``{"out": True}``
+        if it will never claim (its operation failed, the run ended here, no clock); a member
+        that has not reached the step yet answers once it has."""
+        if run in self._ended:
+            return {"out": True}
+        local = await asyncio.shield(self._reaching(run, step))
+        if local is None:
+            return {"out": True}
+        return await local.passed(t)
+
+    def _ask_passed(self, state: _Step, member: str, t: float) -> None:
+        task = state.asking.get(member)
+        if task is None or task.done():  # one question at a time: a later answer covers an
+            task = asyncio.get_running_loop().create_task(self._passed_from(state, member, t))
+            task.add_done_callback(_quiet)  # earlier time, as times only go back
+            state.asking[member] = task
+
+    async def _passed_from(self, state: _Step, member: str, t: float) -> None:
+        while not state.decision.done():
+            try:
+                if member == self.node.name:
+                    answer = await self.or_passed(state.run, state.step, t)
+                else:
+                    state.questions += 1
+                    answer = await self.node.call(
+                        member, "mover.or_passed", state.run, state.step, t, timeout=CALL_TIMEOUT
+                    )
+            except CallTimeout:
+                continue  # it is alive (liveness ends the call sooner): ask again
+            except (NotDelivered, RemoteError) as exc:
+                if isinstance(exc, RemoteError) and exc.remote_type != "Cancelled":
+                    # it answers, but cannot say its time (no clock, a bug): it never claims
+                    log.warning("%s: %s cannot say its time: %s", self.node.name, member, exc)
+                    answer = {"out": True}
+                elif await wait_reachable(self.node, member):
+                    continue  # lost for a moment, or its call was cancelled as it closed
+                else:
+                    return  # gone: _member_left decides, as for any step
+            except Answered as exc:
+                log.warning("%s: %s cannot say its time: %s", self.node.name, member, exc)
+                answer = {"out": True}
+            if not isinstance(answer, dict):
+                answer = {"out": True}
+            finished = answer.get("finished")
+            if isinstance(finished, (int, float)):
+                state.finished[member] = float(finished)
+            elif "passed" in answer:
+                state.beyond[member] = max(t, state.beyond.get(member, -math.inf))
+            else:
+                state.beyond[member] = math.inf
+            self._maybe_decide(state)
+            return
+
     def _expected(self, state: _Step) -> set[str]:
         return {m for m in state.members if m in self.node.team}
 
@@ -254,13 +458,22 @@ class Collectives:
         return (await asyncio.shield(state.decision)).to_wire()
 
     async def or_claim(
-        self, run: str, step: int, member: str, members: list[str], result: Any
+        self,
+        run: str,
+        step: int,
+        member: str,
+        members: list[str],
+        result: Any,
+        finished_at: float | None = None,
     ) -> Any:
-        """A member finished its operation: it wins unless someone claimed first."""
+        """A member finished its operation: it wins unless someone claimed first (or, with a
+        ``finished_at``, finished earlier in simulated time: see the module docstring)."""
         state = self.step(run, step, members, "or")
         state.joined.add(member)
-        if all(m != member for m, _ in state.claims):
-            state.claims.append((member, result))
+        if finished_at is not None:
+            state.timed = True
+        if all(m != member for m, _, _ in state.claims):
+            state.claims.append((member, result, finished_at))
         self._maybe_decide(state)
         return (await asyncio.shield(state.decision)).to_wire()
 
@@ -273,9 +486,37 @@ class Collectives:
             if state.lost and self.policy == "fail":
                 state.decision.set_result(Decision("lost", lost=tuple(state.lost)))
                 return
-        if state.claims:
-            winner, result = state.claims[0]
+        if not state.claims:
+            return
+        if state.timed:
+            self._maybe_decide_timed(state)
+            return
+        winner, result, _ = state.claims[0]
+        state.decision.set_result(Decision("won", winner=winner, result=result))
+
+    def _maybe_decide_timed(self, state: _Step) -> None:
+        """Decide once every live member claimed or went past the earliest claimed time."""
+
+        def key(claim: tuple[str, Any, float | None]) -> tuple[float, str]:
+            return (math.inf if claim[2] is None else claim[2], claim[0])
+
+        winner, result, t = min(state.claims, key=key)
+        at = math.inf if t is None else t
+        # A member that is gone but not yet lost (on_gone's grace) may have finished first:
+        # it is waited for, and its loss then decides as in any step.
+        out = {m for m, _, _ in state.claims} | state.gone | set(state.lost)
+        pending = [
+            m
+            for m in sorted(state.members - out)
+            if state.beyond.get(m, -math.inf) < at and state.finished.get(m, -math.inf) <= at
+        ]
+        if not pending:
             state.decision.set_result(Decision("won", winner=winner, result=result))
+            return
+        for member in pending:
+            # a member that finished in time: its claim is coming; one that is gone cannot say
+            if member not in state.finished and member in self.node.team:
+                self._ask_passed(state, member, at)
 
     async def and_done(
         self, run: str, step: int, member: str, members: list[str], result: Any
@@ -311,6 +552,7 @@ class Collectives:
         for state in list(self._steps.values()):
             if state.decision.done() or name not in state.members:
                 continue
+            state.gone.add(name)
             alive = self._expected(state)
             if not alive:
                 state.decision.set_result(Decision("lost", lost=tuple(sorted(state.members))))
@@ -332,6 +574,10 @@ class TaskTeam:
     A node serves collectives through one :class:`Collectives` (it exports fixed procedure
     names): when a node takes part in several runs, pass the same ``collectives`` to each
     (``ProgramHost`` does); without it, a new one is made and replaces the previous one.
+
+    ``clock`` (a :class:`RunClock`, or None) makes ORs decided in simulated time when every
+    member has one (see :meth:`begin`; a team that never begins trusts its own clock).
+    ``seed`` (0 <= seed < 2**63; default: derived from ``run``) seeds :meth:`rng`.
     """
 
     def __init__(
@@ -343,11 +589,18 @@ class TaskTeam:
         collectives: Collectives | None = None,
         policy: Policy = "fail",
         stall_timeout: float = 60.0,
+        clock: RunClock | None = None,
+        seed: int | None = None,
     ) -> None:
         if node.name not in members:
             raise ValueError(f"{node.name!r} is not one of the members {list(members)!r}")
+        if seed is not None and not 0 <= seed < SEED_LIMIT:
+            raise ValueError(f"seed must be at least 0 and below 2**63, got {seed}")
         self.node = node
         self.run = run
+        self.clock = clock
+        self.seed = seed_of(run) if seed is None else seed
+        self._timed: bool | None = None  # whether every member has a clock (known at begin)
         self.members = sorted(set(members))
         self.collectives = collectives or Collectives(node, policy)
         self.stall_timeout = stall_timeout
@@ -358,6 +611,68 @@ class TaskTeam:
     def me(self) -> str:
         """This member's name."""
         return self.node.name
+
+    def rng(self, stream: str = "") -> random.Random:
+        """A generator for this member's random choices, seeded from (``seed``, this member's
+        name, ``stream``): the same seed gives the same choices on every run, whatever the run
+        is called, and each member and stream its own sequence. Each call starts afresh."""
+        return random.Random(f"{self.seed}/{self.me}/{stream}")
+
+    @property
+    def simulated(self) -> bool:
+        """Whether this team's ORs are decided in simulated time (see :meth:`begin`)."""
+        return self.clock is not None and self._timed is not False
+
+    async def begin(self, timeout: float | None = None) -> None:
+        """The barrier a run starts with (a step of kind ``"begin"``): every member reports
+        its clock's time and goes on once all have, so that all start on the same tick.
+
+        From then on the team's ORs are decided in simulated time if every member has a clock,
+        by wall-clock arrival if any has none. Members whose clocks differ are logged (a
+        warning naming the spread). Raises MemberLost if a member is lost, or if not every
+        member began within ``timeout`` seconds.
+        """
+        metrics = self._begin("begin")
+        now = self.clock.now() if self.clock is not None else None
+        try:
+            async with asyncio.timeout(timeout):
+                decision = await self._and_designated(metrics, {"now": now})
+        except TimeoutError:
+            raise MemberLost(
+                f"run {self.run!r}: not every member of {self.members} began within {timeout} s",
+                members=frozenset(self.members) - {self.me},
+            ) from None
+        metrics.continued = time.perf_counter()
+        self._raise_lost(metrics, decision)
+        nows: dict[str, float | None] = {}
+        for member, report in decision.results.items():
+            value = report.get("now") if isinstance(report, dict) else None
+            nows[member] = float(value) if isinstance(value, (int, float)) else None
+        timed = {m: v for m, v in nows.items() if v is not None}
+        self._timed = len(timed) == len(nows)
+        if self._timed and timed and max(timed.values()) > min(timed.values()):
+            spread = max(timed.values()) - min(timed.values())
+            log.warning(
+                "%s: run %r began %.3f s of simulated time apart: %s",
+                self.me,
+                self.run,
+                spread,
+                ", ".join(f"{m} {v:.3f}" for m, v in sorted(timed.items())),
+            )
+        elif timed and not self._timed:
+            log.info(
+                "%s: run %r: %s have no clock; its ORs go by wall-clock arrival",
+                self.me,
+                self.run,
+                sorted(m for m, v in nows.items() if v is None),
+            )
+
+    def _raise_lost(self, metrics: StepMetrics, decision: Decision) -> None:
+        if decision.kind == "lost":
+            raise MemberLost(
+                f"step {metrics.step} of run {self.run!r} lost {list(decision.lost)}",
+                members=frozenset(decision.lost),
+            )
 
     async def distributed_or(
         self,
@@ -370,23 +685,23 @@ class TaskTeam:
         returns. Raises MemberLost if a member is lost (policy ``fail``) or all are.
         """
         metrics = self._begin("or")
-        op = asyncio.ensure_future(operation())
+        local = _LocalOp(self.clock, operation) if self.clock and self.simulated else None
+        op = local.op if local is not None else asyncio.ensure_future(operation())
+        self.collectives.reached(self.run, metrics.step, local)
         try:
-            decision = await self._or_decision(metrics, op)
+            decision = await self._or_decision(metrics, op, local)
         finally:
             if not op.done():
                 op.cancel()
             await asyncio.gather(op, return_exceptions=True)  # the losers' cleanup runs here
         metrics.continued = time.perf_counter()
-        if decision.kind == "lost":
-            raise MemberLost(
-                f"step {metrics.step} of run {self.run!r} lost {list(decision.lost)}",
-                members=frozenset(decision.lost),
-            )
+        self._raise_lost(metrics, decision)
         outcome = Outcome(decision.winner, decision.result)
         return await continuation(outcome) if continuation else outcome
 
-    async def _or_decision(self, metrics: StepMetrics, op: asyncio.Future[Any]) -> Decision:
+    async def _or_decision(
+        self, metrics: StepMetrics, op: asyncio.Future[Any], local: _LocalOp | None
+    ) -> Decision:
         """Wait for the step's decision: claim it if ``op`` finishes first, else hear it.
 
         The designated member announces each decision once (one broadcast); a member that has
@@ -397,10 +712,11 @@ class TaskTeam:
         heard = self.collectives.heard(self.run, metrics.step)
         designated = await self._designated()
         try:
-            return await self._or_wait(metrics, op, heard, designated)
+            return await self._or_wait(metrics, op, heard, designated, local)
         finally:
-            # The designated member counts its announcement's deliveries (n-1, or none).
-            metrics.messages += self.collectives.announced(self.run, metrics.step)
+            # The designated member counts its announcement's deliveries (n-1, or none), and
+            # in simulated time its questions.
+            metrics.messages += self.collectives.sent(self.run, metrics.step)
 
     async def _or_wait(
         self,
@@ -408,6 +724,7 @@ class TaskTeam:
         op: asyncio.Future[Any],
         heard: asyncio.Future[Decision],
         designated: str,
+        local: _LocalOp | None,
     ) -> Decision:
         poll: asyncio.Future[Any] | None = None
         poll_at = time.monotonic() + POLL_AFTER
@@ -420,8 +737,9 @@ class TaskTeam:
                     return Decision.from_wire(poll.result())  # raises _Retry if it failed
                 if op.done() and not op.cancelled() and op.exception() is None:
                     metrics.finished = metrics.finished or time.perf_counter()
+                    when = () if local is None else (local.finished_at,)  # simulated time
                     answer = await self._ask(
-                        metrics, designated, "mover.or_claim", *args, op.result()
+                        metrics, designated, "mover.or_claim", *args, op.result(), *when
                     )
                     return Decision.from_wire(answer)
                 waiting: set[asyncio.Future[Any]] = {heard}
@@ -477,11 +795,7 @@ class TaskTeam:
         else:
             decision = await self._and_all(metrics, wire)
         metrics.continued = time.perf_counter()
-        if decision.kind == "lost":
-            raise MemberLost(
-                f"step {metrics.step} of run {self.run!r} lost {list(decision.lost)}",
-                members=frozenset(decision.lost),
-            )
+        self._raise_lost(metrics, decision)
         if error is not None:
             raise error
         results = {m: _unwire(r) for m, r in decision.results.items()}
@@ -602,6 +916,11 @@ async def wait_reachable(
     back = wanted <= node.team.members()
     log.info("%s: links back; %s %s", node.name, sorted(wanted), "back" if back else "gone")
     return back
+
+
+def _cancel_all(tasks: dict[str, asyncio.Task[None]]) -> None:
+    for task in tasks.values():
+        task.cancel()
 
 
 def _quiet(task: asyncio.Future[Any]) -> None:
