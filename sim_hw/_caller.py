@@ -303,7 +303,8 @@ class Ticks:
     * ``idling(stop)``: the world neither waits for this robot nor lets it hold a tick back;
       ``stop()`` is the command that stands meanwhile (the stopped drive). The readings keep
       coming (frames carry idle robots' entries). Leaving is acknowledged by the world: on
-      return, the world waits for this robot's command for the tick of ``readings``.
+      return, the world waits for this robot's command for the tick of ``readings``. A block
+      left by cancellation does not wake the robot (it is going away); an exception does.
     * ``passed(t)`` returns once a command was handed in at a tick whose time is after ``t``.
 
     ``time_of(readings)`` is a tick's time (simulated seconds, or a round number); ``tick_of``
@@ -401,12 +402,18 @@ class Ticks:
         try:
             self.readings = await self._guard(self._link.idle(stop()))
             watch = asyncio.get_running_loop().create_task(self._watch())
+            awake = True
             try:
                 yield
+            except asyncio.CancelledError:
+                # Going away (the process ends, or reconnects): no wake. Should this robot
+                # tick again, its first command wakes it in the world (see the door).
+                awake = False
+                raise
             finally:
                 watch.cancel()
                 await asyncio.gather(watch, return_exceptions=True)
-                if self._lost is None:
+                if awake and self._lost is None:
                     self.readings = await self._guard(self._link.wake())
         finally:
             self._idle = False
