@@ -14,7 +14,9 @@ its next instruction (forward: then it stops listening; backward: it keeps going
 LEDs: the beacon always shows whether it is avoiding an obstacle; the front LED shows the goal,
 and is off whenever the movement is not representative of the way from source to target:
 avoiding an obstacle, following a backward instruction, or not following an instruction at all
-(heading for an eye-bot in view, moving at random).
+(heading for an eye-bot in view, moving at random) — and, a choice made here, while it turns on
+the spot to a new direction (its heading then sweeps through every direction, and an eye-bot
+that reads θ_f off it would learn noise).
 
 Choices the paper leaves open, taken here:
 
@@ -233,7 +235,7 @@ class FootBot:
         error = 0.0 if self.heading is None else wrap(self.heading - pose[2])
         w = max(-m.turn_rate, min(m.turn_rate, 4.0 * error))
         v = m.speed if abs(error) < m.aligned else 0.0
-        representative = self.mode is Mode.FOLLOW and not self.backward
+        representative = self.mode is Mode.FOLLOW and not self.backward and v > 0.0
         return FootCommand(v, w, self.goal if representative else None, False)
 
     def _avoid(self, obstacle: float) -> FootCommand:

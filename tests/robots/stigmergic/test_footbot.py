@@ -22,10 +22,10 @@ def test_it_turns_to_theta_0_plus_theta_t_then_drives_with_its_front_led_on() ->
     # θ0 seen at +90° in its frame, θ_t = +30° from θ0: drive at 120° from its heading (0)
     cmd = bot.step(FootPerception(pose=(0, 0, 0.0), heard=_heard("e1", math.pi / 6, math.pi / 2)))
     assert bot.mode is Mode.FOLLOW and bot.heading == pytest.approx(2 * math.pi / 3)
-    assert cmd.v == 0.0 and cmd.w > 0.0  # turning first
-    assert cmd.front is Goal.TARGET and not cmd.avoiding
+    assert cmd.v == 0.0 and cmd.w > 0.0  # turning first, its front LED off meanwhile
+    assert cmd.front is None and not cmd.avoiding
     cmd = bot.step(FootPerception(pose=(0, 0, 2 * math.pi / 3)))
-    assert cmd.v == 0.3 and cmd.w == pytest.approx(0.0)
+    assert cmd.v == 0.3 and cmd.w == pytest.approx(0.0) and cmd.front is Goal.TARGET
 
 
 def test_a_forward_instruction_is_followed_and_its_eye_bot_is_ignored_after() -> None:
@@ -47,7 +47,9 @@ def test_a_backward_instruction_is_followed_with_the_led_off_while_listening_on(
     assert bot.backward and bot.heading == pytest.approx(-2.5) and cmd.front is None
     # then e2 sends a forward direction (relative to e1's east): taken, and e2 no longer heard
     cmd = bot.step(FootPerception(pose=(2, 0, 0.0), heard=_heard("e2", 0.4)))
-    assert not bot.backward and bot.heading == pytest.approx(0.4) and cmd.front is Goal.TARGET
+    assert not bot.backward and bot.heading == pytest.approx(0.4) and cmd.front is None
+    cmd = bot.step(FootPerception(pose=(2, 0, 0.4)))  # turned: it drives, its front LED on
+    assert cmd.front is Goal.TARGET
     bot.step(FootPerception(pose=(2, 0, 0.0), heard=_heard("e2", math.pi)))
     assert bot.heading == pytest.approx(0.4)
 
@@ -97,7 +99,9 @@ def test_obstacles_are_avoided_with_the_beacon_saying_so() -> None:
     cmd = bot.step(FootPerception(pose=(0.1, 0, -0.8)))
     assert (cmd.v, cmd.w, cmd.avoiding, cmd.front) == (0.3, 0.0, False, None)
     cmd = bot.step(FootPerception(pose=(0.5, -0.3, -0.8)))
-    assert cmd.w > 0 and cmd.front is Goal.TARGET
+    assert cmd.w > 0 and cmd.v == 0.0 and cmd.front is None
+    cmd = bot.step(FootPerception(pose=(0.5, -0.3, 0.0)))
+    assert cmd.v > 0 and cmd.front is Goal.TARGET
     other = _bot()
     cmd = other.step(FootPerception(pose=(0, 0, 0), obstacle=-1.2))  # right side: turn left
     assert cmd.avoiding and cmd.w > 0 and cmd.v > 0
