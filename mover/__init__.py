@@ -2,9 +2,10 @@
 
 The public face of the middleware: a :class:`Node` per process (RPC, range-limited broadcasts,
 liveliness and team membership over Eclipse Zenoh), the :class:`Team` and its key, the
-collectives (:class:`TaskTeam` with ``distributed_or`` / ``distributed_and``), programs
-(:class:`ProgramHost`, :func:`launch`, and ``PROGRESS_TOPIC``, the topic under which members
-report a run's progress: ``f"{PROGRESS_TOPIC}/{run}"``) and the errors. Everything else lives in
+collectives (:class:`TaskTeam` with ``distributed_or`` / ``distributed_and``, in simulated time
+over a :class:`RunClock`), programs (:class:`ProgramHost`, :func:`launch`, and
+``PROGRESS_TOPIC``, the topic under which members report a run's progress:
+``f"{PROGRESS_TOPIC}/{run}"``) and the errors. Everything else lives in
 private modules; the command-line helpers shared by every process are in :mod:`mover.cli`.
 """
 
@@ -33,7 +34,7 @@ from ._node import Node
 from ._programs import PROGRESS_TOPIC, ProgramHost, RunTeam, launch
 from ._radio import FixedLocator, Locator, Message, Neighbour, RadioModel, Subscription
 from ._rpc import procedure
-from ._tasks import Collectives, OperationFailed, Outcome, StepMetrics, TaskTeam
+from ._tasks import Collectives, OperationFailed, Outcome, RunClock, StepMetrics, TaskTeam
 from ._wire import pack, unpack
 
 __all__ = [
@@ -66,6 +67,7 @@ __all__ = [
     "Refused",
     "RemoteError",
     "RobotLost",
+    "RunClock",
     "RunTeam",
     "StepMetrics",
     "Subscription",

@@ -27,10 +27,11 @@ claim); a member that has not reached the step yet answers once it has. The desi
 decides when every live member has claimed or shown it went past the earliest claimed time:
 the winner is the earliest finish time, ties going to the first member by name. A member that
 leaves meanwhile is handled as in any step (``MemberLost``, or survived). The decision reaches
-the members as above. Messages: a claim and its answer, one question and its answer per other
-member, the announcement: 3n - 1 for a short step (3(n - 1) when the designated member is the
-winner), up to 4n - 2 for a long one (the polls add theirs; a member that finishes before the
-decision adds a claim). Without a clock the wall-clock rule above holds, at its cost.
+the members as above. Messages: 3(n - 1) for a short step (a claim and its answer, n - 2
+questions and their answers — the designated member asks itself for free — and n - 1
+deliveries of the announcement; the same when the designated member wins: n - 1 questions, no
+claim sent), at most 4(n - 1) for a long one (polls replace the announcement); each further
+claim before the decision adds two. Without a clock the wall-clock rule above holds, at its cost.
 A member waiting for the decision must keep its hardware ticking (``hw.clock.ticking()``), or a
 lock-step world holds still and the others never pass the claimed time.
 
