@@ -94,7 +94,7 @@ async def explore_maze(
     robot: Any,
     team: Any,
     method: str = "cu_lvp",
-    seed: int = 0,
+    seed: int | None = None,
     starts: list[list[int]] | None = None,
     shape: list[int] | None = None,
     max_rounds: int = 0,
@@ -104,10 +104,11 @@ async def explore_maze(
     """Explore the maze with ``method`` (cu_lvp, nf, cu_mnm, cu_jgr, cu_bso, hedac).
 
     ``starts`` are every member's start cell in member-name order and ``shape`` the maze's
-    (rows, cols). ``seed`` gives agent ``i`` the ``i``-th child of ``SeedSequence(seed)``, as
-    the in-process ``make_team`` does. With ``snapshot_dir`` the robot writes its map there
-    (``<robot>.txt``) at the end. Returns rounds, cells moved, message bytes sent (msgpack),
-    cells known. ``exchanges`` is the number of map exchanges per round (1: the paper's).
+    (rows, cols). ``seed`` (default: the run's, ``team.seed``) gives agent ``i`` the ``i``-th
+    child of ``SeedSequence(seed)``, as the in-process ``make_team`` does. With ``snapshot_dir``
+    the robot writes its map there (``<robot>.txt``) at the end. Returns rounds, cells moved,
+    message bytes sent (msgpack), cells known. ``exchanges`` is the number of map exchanges per
+    round (1: the paper's).
     """
     if not starts or not shape:
         raise ValueError("starts and shape are needed (launch data: the team's start cells)")
@@ -117,6 +118,7 @@ async def explore_maze(
         raise ValueError(f"{len(starts)} starts for {n} members")
     i = member_index(robot, team)
     cells = [(int(r), int(c)) for r, c in starts]
+    seed = team.seed if seed is None else seed
     rng = np.random.default_rng(np.random.SeedSequence(seed).spawn(n)[i])
     agent = ExplorerAgent(
         i, (int(shape[0]), int(shape[1])), cells, make_policy(method.replace("_", "-")), rng

@@ -96,20 +96,21 @@ async def foraging(
     robot: Any,
     team: Any,
     method: str = "cmarking",
-    seed: int | list[int] = 0,
+    seed: int | list[int] | None = None,
     q_max: int = 100,
     max_rounds: int = 0,
 ) -> dict[str, Any]:
     """Forage with ``method`` until the world says the resources are exhausted.
 
     Agent ``i`` (the ``i``-th member in name order) draws from the ``i``-th generator spawned
-    from ``SeedSequence(seed)``, as the in-process runner's agents do; on a world with
-    sequential turns the run then repeats the in-process one. Returns this robot's rounds,
-    units it delivered and cells it moved.
+    from ``SeedSequence(seed)`` (default: the run's seed, ``team.seed``), as the in-process
+    runner's agents do; on a world with sequential turns the run then repeats the in-process
+    one. Returns this robot's rounds, units it delivered and cells it moved.
     """
     if method not in METHODS:
         raise ValueError(f"unknown method {method!r}; choose from {', '.join(METHODS)}")
     hw: GridHardware = robot.hw
+    seed = team.seed if seed is None else seed
     rng = np.random.default_rng(np.random.SeedSequence(seed)).spawn(len(team.members))[
         member_index(robot, team)
     ]

@@ -30,7 +30,7 @@ async def levy_search(
     team: RunTeam,
     method: str = "L+P",
     targets: int = 1,
-    seed: int = 0,
+    seed: int | None = None,
     alpha: float = 1.0,
     scale: float = 1.0,
     cap: float = 20.0,
@@ -44,10 +44,12 @@ async def levy_search(
     """Search until the team has found ``targets`` targets (or ``max_time`` s have passed).
 
     Robot i of the members in name order walks with ``np.random.default_rng([seed, i])``, as
-    ``experiments.levy.run_world`` seeds it. Returns the targets this robot marked, every
-    find it knows of (seconds after the common start) and the search time (the last find).
+    ``experiments.levy.run_world`` seeds it (``seed`` defaults to the run's, ``team.seed``).
+    Returns the targets this robot marked, every find it knows of (seconds after the common
+    start) and the search time (the last find).
     """
     hw, node = robot.hw, team.node
+    seed = team.seed if seed is None else seed
     rng = np.random.default_rng([seed, sorted(team.members).index(team.me)])
     cfg = LevyParams(
         speed=speed, sense_range=sense_range, signature_range=signature_range, rho0=rho0

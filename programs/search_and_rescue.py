@@ -32,15 +32,17 @@ async def search_and_rescue(
     path: list[list[float]] | None = None,
     width: float = 1.2,
     recognise: str = "box",
-    seed: int = 0,
+    seed: int | None = None,
 ) -> dict[str, Any]:
     """Find an object, gather at it, move it along ``path`` (default: 3 m along +x).
 
     ``width`` is the object's width across the path (where the robots stand along its rear
-    face); ``recognise`` is ``"push"`` for the paper's push test or a camera kind.
+    face); ``recognise`` is ``"push"`` for the paper's push test or a camera kind. The random
+    walk draws from ``team.rng("search")`` (the run's seed), or, given ``seed``, from a
+    generator of ``seed`` and this robot's name.
     Returns the winner, the object's estimated start and how far this robot saw it move.
     """
-    rng = random.Random(f"{seed}/{team.me}")
+    rng = team.rng("search") if seed is None else random.Random(f"{seed}/{team.me}")
     async with robot.hw.clock.ticking():  # a lock-step world must not wait on an idle robot
         await team.report("searching")
         won = await team.distributed_or(lambda: search(robot, recognition(recognise), rng=rng))
