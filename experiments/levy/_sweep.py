@@ -7,14 +7,12 @@ so that more trials can be added to a point (``--runs 100`` after ``--runs 50``)
 
 from __future__ import annotations
 
-import json
-import multiprocessing
 import time
 from dataclasses import replace
 from pathlib import Path
-from typing import Any
 
 from .._common import Progress
+from .._saved import Record, load_runs, run_pool
 from ._paper import (
     ALPHA_ROBOTS,
     ALPHA_TARGETS,
@@ -24,7 +22,6 @@ from ._paper import (
 from ._settings import LevySettings, Point
 from ._trial import run_trial
 
-Record = dict[str, Any]
 SWEEPS = ("fig8", "fig9", "alpha")
 
 
@@ -44,18 +41,7 @@ def points(s: LevySettings, sweep: str) -> list[Point]:
 
 def load(save: Path | None, point: Point, seed: int) -> dict[int, Record]:
     """The saved runs of ``point`` under master ``seed``, by run index."""
-    if save is None:
-        return {}
-    path = save / f"{point.name}.jsonl"
-    if not path.exists():
-        return {}
-    got: dict[int, Record] = {}
-    for line in path.read_text().splitlines():
-        if line.strip():
-            rec = json.loads(line)
-            if rec.get("seed") == seed:
-                got[int(rec["run"])] = rec
-    return got
+    return load_runs(None if save is None else save / f"{point.name}.jsonl", seed)
 
 
 def _one(job: tuple[LevySettings, Point, int]) -> Record:
@@ -76,19 +62,20 @@ def run_points(
     jobs = [(s, p, k) for p in pts for k in range(s.runs) if k not in have[p]]
     records = [r for p in pts for k, r in sorted(have[p].items()) if k < s.runs]
     t0 = time.monotonic()
-    bar = Progress(len(jobs), label, enabled=s.progress and bool(jobs))
-    if s.save is not None:
-        s.save.mkdir(parents=True, exist_ok=True)
-    fresh: list[Record] = []
-    ctx = multiprocessing.get_context("fork")
-    with ctx.Pool(max(1, s.workers)) as pool:
-        for rec in pool.imap_unordered(_one, jobs, chunksize=1):
-            records.append(rec)
-            fresh.append(rec)
-            if s.save is not None:
-                p = Point(rec["method"], rec["robots"], rec["targets"], rec["alpha"])
-                with (s.save / f"{p.name}.jsonl").open("a") as f:
-                    f.write(json.dumps(rec) + "\n")
-            bar.update(len(fresh), f"{rec['method']} n={rec['robots']} t={rec['targets']}")
-    bar.close(len(fresh))
+    save = s.save
+
+    def save_to(rec: Record) -> Path:
+        assert save is not None
+        p = Point(rec["method"], rec["robots"], rec["targets"], rec["alpha"])
+        return save / f"{p.name}.jsonl"
+
+    fresh = run_pool(
+        jobs,
+        _one,
+        workers=s.workers,
+        save_to=None if save is None else save_to,
+        bar=Progress(len(jobs), label, enabled=s.progress and bool(jobs)),
+        status=lambda rec: f"{rec['method']} n={rec['robots']} t={rec['targets']}",
+    )
+    records.extend(fresh)
     return records, fresh, time.monotonic() - t0

@@ -1,0 +1,66 @@
+"""Runs saved one JSON object a line, resumed by a later invocation, made on a pool of workers.
+
+A runner keeps each point's runs in a JSON-lines file, appended as they finish. A later
+invocation with the same master seed reads them back (:func:`load_runs`) and makes only the
+missing ones (:func:`run_pool`), so that trials can be added to a point across sessions.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import multiprocessing
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any, TypeVar
+
+from ._common import Progress
+
+Record = dict[str, Any]
+Job = TypeVar("Job")
+
+log = logging.getLogger(__name__)
+
+
+def load_runs(path: Path | None, seed: int) -> dict[int, Record]:
+    """The runs saved in ``path`` under master ``seed``, by run index (a line that does not
+    parse, the last one of a run cut short say, is skipped with a warning)."""
+    if path is None or not path.exists():
+        return {}
+    got: dict[int, Record] = {}
+    for number, line in enumerate(path.read_text().splitlines(), 1):
+        if not line.strip():
+            continue
+        try:
+            rec = json.loads(line)
+            if rec.get("seed") == seed:
+                got[int(rec["run"])] = rec
+        except (ValueError, KeyError, TypeError, AttributeError):
+            log.warning("%s:%d: not a saved run, skipped", path, number)
+    return got
+
+
+def run_pool(
+    jobs: Sequence[Job],
+    work: Callable[[Job], Record],
+    *,
+    workers: int,
+    save_to: Callable[[Record], Path] | None,
+    bar: Progress,
+    status: Callable[[Record], str],
+) -> list[Record]:
+    """Make ``jobs`` with ``work`` on ``workers`` forked processes; append each record to the
+    file ``save_to(record)`` as it comes (None: keep nothing). Returns the records made."""
+    fresh: list[Record] = []
+    ctx = multiprocessing.get_context("fork")
+    with ctx.Pool(max(1, workers)) as pool:
+        for rec in pool.imap_unordered(work, jobs, chunksize=1):
+            fresh.append(rec)
+            if save_to is not None:
+                path = save_to(rec)
+                path.parent.mkdir(parents=True, exist_ok=True)
+                with path.open("a") as f:
+                    f.write(json.dumps(rec) + "\n")
+            bar.update(len(fresh), status(rec))
+    bar.close(len(fresh))
+    return fresh
