@@ -9,13 +9,14 @@ one over :class:`~robots.grid_hal.GridHardware` offers
 :func:`~robots.procedures.grid_procedures`.
 
 The process itself only touches what every hardware has (:class:`BaseHardware`): it keeps the
-clock ticking while no program drives it, stops the drive on exit, and hands the radio's
-locator to mover's range-limited broadcast.
+clock idle while no program drives it, stops the drive, and hands the radio's locator to
+mover's range-limited broadcast.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
+from contextlib import AbstractAsyncContextManager
 from typing import TYPE_CHECKING, Any, Protocol, TypeVar, runtime_checkable
 
 from .hal import RadioLocator
@@ -26,8 +27,12 @@ if TYPE_CHECKING:
 __all__ = ["BaseHardware", "HardwareBackend", "check_options"]
 
 
-class _Ticks(Protocol):
-    async def tick(self) -> None: ...
+class _Idles(Protocol):
+    def now(self) -> float: ...
+
+    async def passed(self, t: float) -> None: ...
+
+    def idling(self) -> AbstractAsyncContextManager[None]: ...
 
 
 class _Stops(Protocol):
@@ -37,18 +42,19 @@ class _Stops(Protocol):
 class BaseHardware(Protocol):
     """What the robot process touches on any hardware (continuous or grid).
 
-    ``clock.tick()`` hands in this tick's (round's) commands and waits for the next readings;
-    ``drive.stop()`` stops the motors; ``radio`` is the transport's ground-truth locator.
+    ``clock.idling()`` keeps the robot idle while no run drives it, ``clock.now()`` and
+    ``clock.passed(t)`` make the host's run clock (see ``robots.hal.Clock``); ``drive.stop()``
+    stops the motors; ``radio`` is the transport's ground-truth locator.
     """
 
     @property
-    def clock(self) -> _Ticks:
-        """The hardware's clock, ticked by the process while idle."""
+    def clock(self) -> _Idles:
+        """The hardware's clock, idle while no run drives it."""
         ...
 
     @property
     def drive(self) -> _Stops:
-        """The drive, stopped when the process ends."""
+        """The drive, stopped when the robot becomes idle."""
         ...
 
     @property

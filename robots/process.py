@@ -5,8 +5,15 @@ given by the environment (``MOVER_TEAM``, ``MOVER_TEAM_KEY``, ``MOVER_CONNECT``.
 its hardware through a backend chosen by name where the process is launched (the
 ``mover.hardware`` entry points, each a :class:`~robots.backend.HardwareBackend`: ``sim`` is the
 continuous world over zenoh, ``grid`` the grid world; ``none`` is a workstation without a body),
-exports the procedures its backend offers for that hardware, hosts the installed programs (the
-``mover.programs`` entry points) and keeps its hardware's clock ticking while idle.
+exports the procedures its backend offers for that hardware, and hosts the installed programs
+(the ``mover.programs`` entry points).
+
+While no run drives the hardware, the robot is idle (``async with hw.clock.idling()``, in a
+task): a lock-step world neither waits for it nor ticks for it. :class:`HostClock` is the
+host's :class:`mover.RunClock` over that: a run engages it when it starts (the idle task
+ends, and the world waits for this robot's commands again) and releases it when the last run
+on the host ends (idle again). A hardware lost while idle, or in a run, makes the process wait
+for the hardware and connect again (``HostClock`` is replaced with the new hardware's).
 """
 
 from __future__ import annotations
@@ -14,6 +21,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
+import math
 from collections.abc import Callable, Mapping
 from importlib.metadata import EntryPoint, entry_points
 from typing import Any
@@ -140,11 +148,16 @@ async def _serve(
             where = hw.radio.position() if hw.radio is not None else None
             at = f"({where[0]:.2f}, {where[1]:.2f})" if where is not None else "a place unknown"
             log.warning("%s: back in the world; its body is at %s", node.name, at)
+        lost: asyncio.Future[HardwareLost] = asyncio.get_running_loop().create_future()
+        clock = HostClock(hw, lost)
+        host.clock = clock  # runs engage it: until then the robot is idle
+        clock.release()
         try:
-            await _idle(hw)
-        except HardwareLost as exc:
-            log.warning("%s: %s; waiting for it to come back", node.name, exc)
-            host.fail_all(exc)  # the runs under way end with it (their finally blocks run)
+            exc = await lost
+        finally:
+            await clock.aclose()
+        log.warning("%s: %s; waiting for it to come back", node.name, exc)
+        host.fail_all(exc)  # the runs under way end with it (their finally blocks run)
 
 
 async def _connect(
@@ -162,16 +175,79 @@ async def _connect(
             waited += 1.0
 
 
-async def _idle(hw: BaseHardware) -> None:
-    """Keep the clock going while idle (lock-step worlds wait for us), until cancelled."""
-    try:
-        while True:
-            # Let the tasks the last readings woke set their commands first, so that a
-            # program's command is never a tick late because this loop ticked before it.
-            for _ in range(3):
-                await asyncio.sleep(0)
-            await hw.clock.tick()
-    finally:
-        hw.drive.stop()
-        with contextlib.suppress(Exception):
-            await asyncio.wait_for(hw.clock.tick(), 1.0)
+class HostClock:
+    """A program host's run clock (``mover.RunClock``) over a robot's hardware and its idle task.
+
+    ``now`` and ``passed`` are the hardware clock's. ``release()`` starts the idle task
+    (``async with hw.clock.idling()``, the drive stopped first); ``engage()`` ends it and returns
+    once it has left ``idling()``, i.e. once the world waits for this robot's commands. Both
+    may be called by concurrent runs. A HardwareLost, idle or in a run (a tick that failed, a
+    world that went away), is set on ``lost`` for the process to end the runs and reconnect;
+    ``engage`` raises it.
+    """
+
+    def __init__(self, hw: BaseHardware, lost: asyncio.Future[HardwareLost]) -> None:
+        self._hw = hw
+        self._lost = lost
+        self._task: asyncio.Task[None] | None = None
+        self._stop = asyncio.Event()
+        self._sentinel = asyncio.get_running_loop().create_task(self._watch())
+
+    def now(self) -> float:
+        """The hardware's time (simulated seconds, or a grid round)."""
+        return float(self._hw.clock.now())
+
+    async def passed(self, t: float) -> None:
+        """Return once this robot handed in a command for a tick after time ``t``."""
+        await self._hw.clock.passed(t)
+
+    async def engage(self) -> None:
+        """Stop idling; on return the world waits for this robot's commands."""
+        task = self._task
+        if task is not None:
+            self._stop.set()
+            await asyncio.wait([task])  # shared by concurrent engages
+            if self._task is task:
+                self._task = None
+        if self._lost.done():
+            raise self._lost.result()
+
+    def release(self) -> None:
+        """No run drives the hardware any more: idle again."""
+        old = self._task
+        if self._lost.done() or (old is not None and not self._stop.is_set()):
+            return  # idle already (or the hardware is lost)
+        self._stop = asyncio.Event()
+        self._task = asyncio.get_running_loop().create_task(self._idle(self._stop, old))
+        self._task.add_done_callback(_retrieved)
+
+    async def _idle(self, stop: asyncio.Event, after: asyncio.Task[None] | None) -> None:
+        if after is not None:
+            await asyncio.wait([after])  # the idle task before has left idling()
+        if stop.is_set():
+            return
+        self._hw.drive.stop()
+        with contextlib.suppress(HardwareLost):  # the sentinel sees it too
+            async with self._hw.clock.idling():
+                await stop.wait()
+
+    async def _watch(self) -> None:
+        """The sentinel: the clock's ``passed(inf)`` ends only when the hardware is lost."""
+        try:
+            await self._hw.clock.passed(math.inf)
+        except HardwareLost as exc:
+            if not self._lost.done():
+                self._lost.set_result(exc)
+
+    async def aclose(self) -> None:
+        """End the idle task and the sentinel (the process is going away, or reconnecting)."""
+        tasks = [t for t in (self._task, self._sentinel) if t is not None]
+        self._task = None
+        for task in tasks:
+            task.cancel()
+        await asyncio.gather(*tasks, return_exceptions=True)
+
+
+def _retrieved(task: asyncio.Task[Any]) -> None:
+    if not task.cancelled():
+        task.exception()  # retrieved: an idle task that failed (the node closing) is no one's

@@ -20,12 +20,13 @@ async def test_two_robots_join_tick_and_forage(tmp_path: Path) -> None:
         await start_world(c, path, "--expect", "2")
         await start_robots(c, names, [{"view": 0}, {"view": 0}])
         await node.team.wait_for([WORLD, *names], timeout=20)
-        first = await node.call(WORLD, "state", timeout=5)
         async with asyncio.timeout(10):
-            while (idle := await node.call(WORLD, "state", timeout=5))["round"] <= first["round"]:
+            while (idle := await node.call(WORLD, "state", timeout=5))["idle"] != names:
                 await asyncio.sleep(0.05)
         assert sorted(idle["robots"]) == names
-        assert idle["round"] > first["round"], "idle robots keep the rounds going"
+        await asyncio.sleep(0.3)
+        still = await node.call(WORLD, "state", timeout=5)
+        assert still["round"] == idle["round"], "idle robots hold the world still"
         pose = await node.call("a", "robot.pose", timeout=5)
         assert pose == [0.0, 0.0, 0.0]
         outcomes = await asyncio.wait_for(

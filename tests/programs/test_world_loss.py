@@ -38,8 +38,13 @@ async def test_robots_survive_a_world_that_dies_and_comes_back(tmp_path: Path) -
                 await asyncio.sleep(0.2)
         again = await asyncio.wait_for(launch(node, "hello_team", NAMES, {}, run="again"), 60)
         assert all("result" in o for o in again.values()), again
-        poses = await asyncio.gather(*(node.call(n, "robot.sense", timeout=10) for n in NAMES))
-        assert all(p["time"] > 0 for p in poses)  # the new world's clock runs for them
+        async with asyncio.timeout(10):  # in the new world, and idle again after the run
+            while (status := await node.call("world", "status", timeout=10))["idle"] != NAMES:
+                await asyncio.sleep(0.1)
+        assert status["robots"] == sorted(NAMES)
+        senses = await asyncio.gather(*(node.call(n, "robot.sense", timeout=10) for n in NAMES))
+        times = {round(s["time"] / 0.1) for s in senses}
+        assert times == {status["tick"]}, (times, status)  # the new world's clock, not the old
     for name, log in logs.items():
         text = log.read_text()
         assert "Traceback" not in text, text[-2000:]

@@ -1,0 +1,76 @@
+"""robots.process.HostClock, the host's run clock over a robot's hardware (in one process)."""
+
+from __future__ import annotations
+
+import asyncio
+
+import pytest
+
+from robots.hal import HardwareLost
+from robots.process import HostClock
+from sim_hw import RobotDropped, World, WorldServer, in_process, random_obstacles
+
+
+async def _world(*names: str) -> tuple[WorldServer, list[object]]:
+    server = WorldServer(World(random_obstacles((6.0, 6.0), 0)), expect=len(names))
+    hws = await asyncio.gather(*(in_process(server, n) for n in names))
+    return server, list(hws)
+
+
+async def _idle_is(server: WorldServer, idle: list[str]) -> None:
+    async with asyncio.timeout(2):
+        while sorted(server.idle_robots) != idle:
+            await asyncio.sleep(0.005)
+
+
+async def test_release_idles_and_engage_returns_once_the_world_waits_for_us() -> None:
+    server, (a, b) = await _world("a", "b")
+    lost: asyncio.Future[HardwareLost] = asyncio.get_running_loop().create_future()
+    clock = HostClock(a, lost)  # type: ignore[arg-type]
+    a.drive.set_velocity(0.3, 0.0)  # type: ignore[attr-defined]
+    clock.release()
+    clock.release()  # idle already: nothing more
+    await _idle_is(server, ["a"])
+    await asyncio.wait_for(b.clock.sleep(0.5), 2)  # type: ignore[attr-defined]
+    assert server.world.robots["a"].v == 0.0  # stopped when idling began
+    assert clock.now() == pytest.approx(0.5)  # the readings kept coming
+    await asyncio.gather(clock.engage(), clock.engage())  # two runs start together
+    assert server.idle_robots == frozenset()
+    passed = asyncio.ensure_future(clock.passed(0.5))
+    await asyncio.gather(a.clock.tick(), b.clock.tick())  # type: ignore[attr-defined]
+    assert not passed.done()  # a command at t = 0.5 is not after 0.5
+    await asyncio.gather(a.clock.tick(), b.clock.tick())  # type: ignore[attr-defined]
+    await asyncio.wait_for(passed, 1)
+    clock.release()
+    await _idle_is(server, ["a"])
+    await clock.aclose()
+    await server.aclose()
+
+
+async def test_a_release_during_an_engage_idles_again() -> None:
+    server, (a,) = await _world("a")
+    lost: asyncio.Future[HardwareLost] = asyncio.get_running_loop().create_future()
+    clock = HostClock(a, lost)  # type: ignore[arg-type]
+    clock.release()
+    await _idle_is(server, ["a"])
+    engaging = asyncio.ensure_future(clock.engage())
+    await asyncio.sleep(0)
+    clock.release()  # the run ended (or was cancelled) before its engage returned
+    await engaging
+    await _idle_is(server, ["a"])
+    await clock.aclose()
+    await server.aclose()
+
+
+async def test_a_robot_dropped_while_idle_is_lost() -> None:
+    server, (a,) = await _world("a")
+    lost: asyncio.Future[HardwareLost] = asyncio.get_running_loop().create_future()
+    clock = HostClock(a, lost)  # type: ignore[arg-type]
+    clock.release()
+    await _idle_is(server, ["a"])
+    server.drop("a", "left the team")
+    assert isinstance(await asyncio.wait_for(lost, 1), RobotDropped)
+    with pytest.raises(RobotDropped):
+        await clock.engage()
+    await clock.aclose()
+    await server.aclose()
