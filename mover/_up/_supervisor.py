@@ -19,7 +19,6 @@ from __future__ import annotations
 import asyncio
 import collections
 import contextlib
-import inspect
 import json
 import os
 import signal
@@ -326,15 +325,11 @@ class Supervisor:
     async def launch(
         self, program: str, members: list[str], args: dict[str, Any], *, run: str
     ) -> dict[str, dict[str, Any]]:
-        """:func:`mover.launch` with the run's program seed (and the file's ``share``), when
-        this version of ``launch`` takes them."""
-        extra: dict[str, Any] = {}
-        takes = inspect.signature(launch).parameters
-        if "seed" in takes:
-            extra["seed"] = self.seeds.program
-        if "share" in takes and self.plan.program is not None and self.plan.program.share:
-            extra["share"] = True
-        return await launch(self.node, program, members, args, run=run, **extra)
+        """:func:`mover.launch` with the run's program seed and the file's ``share``."""
+        share = self.plan.program is not None and self.plan.program.share
+        return await launch(
+            self.node, program, members, args, run=run, seed=self.seeds.program, share=share
+        )
 
     async def run_program(self) -> bool:
         """Start the file's program, print its progress and outcomes; True if every member
