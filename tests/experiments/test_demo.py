@@ -118,8 +118,9 @@ def report(out: str) -> list[str]:
 @pytest.mark.timeout(400)
 @pytest.mark.xfail(
     strict=False,
-    reason="needs idle robots that do not tick the world (S) and a distributed_or in "
-    "simulated time with seeded runs (M); issue 12, Build 4",
+    reason="issue 12, Build 4: the winner and its find now repeat, but a phase's simulated "
+    "time is the world's snapshot when the report arrives (reports carry no simulated time) and "
+    "the trajectories part after the OR (the losers are cancelled on a wall-clock tick)",
 )
 async def test_the_demo_three_times_with_one_seed_gives_identical_reports(tmp_path: Path) -> None:
     reports = []
