@@ -126,8 +126,8 @@ def world_caller(node: Any, world: str, call_timeout: float) -> Callable[..., Aw
             try:
                 return await node.call(world, procedure, *args, timeout=call_timeout)
             except CallTimeout:
-                log.info("%s: %r on %r not answered in %.0f s: asking again", node.name,
-                         procedure, world, call_timeout)  # fmt: skip
+                said = f"{procedure!r} on {world!r} not answered in {call_timeout:.0f} s"
+                log.info("%s: %s: asking again (the world is alive)", node.name, said)
             except (RobotLost, UnknownRobot):
                 vanished = time.monotonic() if vanished is None else vanished
                 if time.monotonic() - vanished >= call_timeout:
