@@ -91,3 +91,15 @@ async def test_an_idle_robot_holds_nothing_back_and_reads_the_frames() -> None:
         assert server.world.tick == 15 and ha.clock.now() == hb.clock.now()
         # b's calls: its join, its first tick, idle and wake; every other tick was a frame
         assert b.stats["sent.call"] == 4
+
+
+async def test_a_call_the_world_answers_late_is_asked_again() -> None:
+    async with _team(2, "a", "b", frames=False) as (server, _, a, b):
+        ha = await remote(a, "a", call_timeout=0.3)
+        hb = await remote(b, "b")
+        ticking = asyncio.ensure_future(_ticks(ha, 1))  # waits on b, longer than 0.3 s
+        await asyncio.sleep(1.0)
+        assert not ticking.done() and server.dropped == []
+        await _ticks(hb, 1)
+        assert len(await asyncio.wait_for(ticking, 5)) == 1
+        assert a.stats["sent.call"] >= 4  # its join, then the step asked three times or more
