@@ -56,6 +56,9 @@ class Arena:
     """The double corridor's band: (x dividing left from right, y from, y to)."""
     shortest: dict[str, tuple[float, float]] = field(default_factory=dict)
     """Per eye-bot: (θ_s, θ_t) along the shortest path through the eye-bots (θ0 = 0)."""
+    optimum: float = math.nan
+    """Length of the shortest way through the eye-bots, from under the target to under the
+    source (m)."""
 
     def in_source(self, x: float, y: float) -> bool:
         """Whether (x, y) is in the source area."""
@@ -113,12 +116,15 @@ def corridors(ratio: float, length: float = 20.0) -> Arena:
     """Fig. 3: two corridors, the right one ``length`` long, the left one ``ratio`` times."""
     room = 3.0
     base = double_corridor(length=length, ratio=ratio, width=1.0, room=room)
-    w, h = base.size
+    h = base.size[1]
     y0, y1 = room, h - room
     marks = {m.id: m.center for m in base.markers}
     source, target = marks["source"], marks["target"]
-    eyes = _grid("s", (1.0, 0.75), (w - 1.0, room - 0.75), step=(SPACING, 1.5))
-    eyes += _grid("t", (1.0, y1 + 0.75), (w - 1.0, h - 0.75), step=(SPACING, 1.5))
+    # over the rooms: rows 1.5 m apart, columns SPACING apart centred on the source and target
+    k = int((source[0] - 0.5) // SPACING)
+    lo, hi = source[0] - k * SPACING, source[0] + k * SPACING
+    eyes = _grid("s", (lo, room / 2 - 0.75), (hi, room / 2 + 0.75), step=(SPACING, 1.5))
+    eyes += _grid("t", (lo, y1 + room / 2 - 0.75), (hi, y1 + room / 2 + 0.75), step=(SPACING, 1.5))
     for name, line in corridor_paths(length=length, ratio=ratio, width=1.0, room=room).items():
         eyes += [
             EyeBotSpec(f"{name[0]}{k:02d}", p, view=VIEW, cone=CONE)
@@ -184,15 +190,18 @@ def _with_shortest(arena: Arena) -> Arena:
             if d <= reach and _clear(arena.spec.obstacles, eyes[a], eyes[b]):
                 edges[a].append((b, d))
                 edges[b].append((a, d))
-    to_source = _dijkstra(edges, [e for e, p in eyes.items() if arena.in_source(*p)])
-    to_target = _dijkstra(edges, [e for e, p in eyes.items() if arena.in_target(*p)])
+    to_source, far = _dijkstra(edges, [e for e, p in eyes.items() if arena.in_source(*p)])
+    to_target, _ = _dijkstra(edges, [e for e, p in eyes.items() if arena.in_target(*p)])
+    optimum = min(
+        (far[e] for e, p in eyes.items() if arena.in_target(*p) and e in far), default=math.nan
+    )
     shortest = {}
     for e, p in eyes.items():
         shortest[e] = (
             _towards(p, eyes, to_source.get(e), arena.source),
             _towards(p, eyes, to_target.get(e), arena.target),
         )
-    return replace(arena, shortest=shortest)
+    return replace(arena, shortest=shortest, optimum=optimum)
 
 
 def _towards(
@@ -205,9 +214,11 @@ def _towards(
     return math.atan2(to[1] - at[1], to[0] - at[0])
 
 
-def _dijkstra(edges: dict[str, list[tuple[str, float]]], goals: list[str]) -> dict[str, str]:
+def _dijkstra(
+    edges: dict[str, list[tuple[str, float]]], goals: list[str]
+) -> tuple[dict[str, str], dict[str, float]]:
     """For each eye-bot, the next eye-bot on a shortest path to one of ``goals`` (goals
-    themselves have none)."""
+    themselves have none), and each one's distance to the nearest goal."""
     dist = {g: 0.0 for g in goals}
     nxt: dict[str, str] = {}
     heap = [(0.0, g) for g in goals]
@@ -220,7 +231,7 @@ def _dijkstra(edges: dict[str, list[tuple[str, float]]], goals: list[str]) -> di
                 dist[b] = d + w
                 nxt[b] = a
                 heapq.heappush(heap, (d + w, b))
-    return nxt
+    return nxt, dist
 
 
 def _clear(

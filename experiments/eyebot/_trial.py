@@ -223,7 +223,7 @@ def _figures(
     total = counts[0] + counts[1]
     return {
         "arena": arena.spec.name,
-        "seed": seed,
+        "run_seed": seed,
         "footbots": settings.footbots,
         "shortest": settings.shortest,
         "weigh": settings.weigh,

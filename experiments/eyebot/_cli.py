@@ -1,0 +1,109 @@
+"""`mover experiment eyebot`: its command line, the settings it makes of it, and the run."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import secrets
+import time
+from pathlib import Path
+
+from mover.cli import UsageError
+
+from .._common import comma_list, runner_parser
+from . import _report
+from ._sweep import FIGURES, EyebotSettings, points, run_points
+
+_TABLES = {
+    "fig2": _report.fig2,
+    "fig3": _report.fig3,
+    "fig4": _report.fig4,
+    "fig5": _report.fig5,
+    "beyond": _report.beyond,
+}
+MAX_RUNS = 1000
+MAX_DURATION = 100_000.0
+
+
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    """Add the ``eyebot`` experiment runner."""
+    from . import __doc__ as doc
+
+    help = "eye-bots guide foot-bots by stigmergy (Ducatelle et al., sections 5-7)"
+    parser = runner_parser(sub, "eyebot", help, doc)
+    parser.add_argument(
+        "--figure",
+        type=comma_list(str, FIGURES),
+        default=["fig2"],
+        help="comma list of fig2, fig3, fig4, fig5, beyond (default fig2)",
+    )
+    parser.add_argument("--runs", type=int, default=30, help="runs per point (default 30)")
+    parser.add_argument("--seed", type=int, default=None, help="master seed (default: random)")
+    parser.add_argument(
+        "--duration", type=float, default=3000.0, help="simulated seconds a run (default 3000)"
+    )
+    parser.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
+    parser.add_argument(
+        "--save",
+        type=Path,
+        default=Path("results/eyebot/runs"),
+        help="per-point JSON-lines directory, read back and added to (default results/eyebot/runs)",
+    )
+    parser.add_argument("--no-save", action="store_true", help="keep no per-point files")
+    parser.add_argument("--out", type=Path, default=Path("out"), help="figure directory")
+    parser.add_argument("--format", choices=("png", "svg", "pdf"), default="png")
+    parser.add_argument("--no-plots", action="store_true", help="skip the figures")
+    parser.add_argument("--json", action="store_true", help="end with one JSON line of every run")
+    parser.add_argument("--quiet", action="store_true", help="no progress line")
+    parser.set_defaults(func=run)
+
+
+def settings(args: argparse.Namespace) -> EyebotSettings:
+    """The settings the command line asks for, checked; raises
+    :class:`~mover.cli.UsageError` naming what is wrong."""
+    if not 1 <= args.runs <= MAX_RUNS:
+        raise UsageError(f"--runs must be from 1 to {MAX_RUNS}, got {args.runs}")
+    if not 1 <= args.workers <= 64:
+        raise UsageError(f"--workers must be from 1 to 64, got {args.workers}")
+    if not (math.isfinite(args.duration) and 10.0 <= args.duration <= MAX_DURATION):
+        raise UsageError(f"--duration must be from 10 to {MAX_DURATION:g} s, got {args.duration}")
+    save = None if args.no_save else args.save
+    if save is not None and args.duration != 3000.0:  # runs of other lengths are kept apart
+        save = save.with_name(f"{save.name}-duration={args.duration:g}")
+    return EyebotSettings(
+        seed=secrets.randbits(32) if args.seed is None else args.seed,
+        runs=args.runs,
+        figures=tuple(args.figure),
+        duration=args.duration,
+        workers=args.workers,
+        save=save,
+        progress=not args.quiet,
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the figures' points; print the seed, each figure's table, the speed."""
+    s = settings(args)
+    print(f"seed: {s.seed}")
+    print(f"figures: {','.join(s.figures)}  runs per point: {s.runs}  duration: {s.duration:g} s")
+    if s.save is not None:
+        print(f"runs saved in: {s.save}")
+    everything = []
+    for figure in s.figures:
+        t0 = time.monotonic()
+        records, fresh, wall = run_points(s, points(figure), figure)
+        everything.extend(records)
+        print(_TABLES[figure](records))
+        print(f"{figure}: {len(fresh)} runs made in {time.monotonic() - t0:.0f} s wall")
+        if fresh:
+            print(_report.speed(fresh, wall))
+        if not args.no_plots:
+            from ._plots import plot
+
+            path = plot(figure, records, args.out, args.format)
+            if path is not None:
+                print(f"wrote {path}")
+    if args.json:
+        print(json.dumps({"seed": s.seed, "runs": everything}))
+    return 0

@@ -1,0 +1,140 @@
+"""The points of the eye-bot experiment's figures, their runs on a pool, and the saved runs.
+
+A point is an arena (``cluttered`` or ``corridor-r<ratio>``), a number of foot-bots, and how
+the eye-bots work (learning, pre-programmed with the shortest way: ``shortest``, or learning
+with the trip-time weights: ``weigh``). Run k of every point has the same seed (derived from
+the master seed and k), so that the ways of working are compared on the same starts.
+"""
+
+from __future__ import annotations
+
+import functools
+import time
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from .._common import Progress
+from .._saved import Record, load_runs, run_pool
+from ._arena import Arena, cluttered, corridors
+from ._trial import Settings, run
+
+FIGURES = ("fig2", "fig3", "fig4", "fig5", "beyond")
+FIG2_FOOTBOTS = (1, 2, 5, 10, 15, 20)
+FIG3_RATIOS = (1.0, 1.5, 2.0)
+FIG3_FOOTBOTS = 15
+FIG4_FOOTBOTS = (1, 5, 10, 15, 20, 25, 30)
+FIG5_FOOTBOTS = (10, 20, 30)
+BEYOND_FOOTBOTS = (20, 30)
+DEPLOY_EVERY = 30.0
+"""Fig. 3-5: one foot-bot deployed every 30 s."""
+
+
+@dataclass(frozen=True)
+class Point:
+    """One point: an arena, a number of foot-bots, the eye-bots' way of working."""
+
+    arena: str
+    footbots: int
+    eyebots: str = "learning"  # or "shortest", "weigh"
+    deploy_every: float = 0.0
+
+    @property
+    def name(self) -> str:
+        """The point's file name stem (``cluttered_n10_learning``)."""
+        deploy = f"_d{self.deploy_every:g}" if self.deploy_every else ""
+        return f"{self.arena}_n{self.footbots}_{self.eyebots}{deploy}"
+
+
+@dataclass(frozen=True)
+class EyebotSettings:
+    """What to run: the figures, runs per point, the master seed, workers, where to save."""
+
+    seed: int
+    runs: int
+    figures: tuple[str, ...] = ("fig2",)
+    duration: float = 3000.0
+    workers: int = 2
+    save: Path | None = None
+    progress: bool = True
+
+
+def points(figure: str) -> list[Point]:
+    """The points of one figure (Fig. 5 is drawn from Fig. 4's runs)."""
+    if figure == "fig2":
+        return [
+            Point("cluttered", n, way) for n in FIG2_FOOTBOTS for way in ("learning", "shortest")
+        ]
+    if figure == "fig3":
+        return [Point(_corridor(r), FIG3_FOOTBOTS, deploy_every=DEPLOY_EVERY) for r in FIG3_RATIOS]
+    if figure in ("fig4", "fig5"):
+        counts = FIG4_FOOTBOTS if figure == "fig4" else FIG5_FOOTBOTS
+        return [Point(_corridor(1.0), n, deploy_every=DEPLOY_EVERY) for n in counts]
+    if figure == "beyond":
+        return [
+            Point(_corridor(1.5), n, way, DEPLOY_EVERY)
+            for n in BEYOND_FOOTBOTS
+            for way in ("learning", "weigh")
+        ]
+    raise ValueError(f"unknown figure {figure!r}")
+
+
+def _corridor(ratio: float) -> str:
+    return f"corridor-r{ratio:g}"
+
+
+@functools.cache
+def arena(name: str) -> Arena:
+    """The arena a point names."""
+    if name == "cluttered":
+        return cluttered()
+    if name.startswith("corridor-r"):
+        return corridors(float(name.removeprefix("corridor-r")))
+    raise ValueError(f"unknown arena {name!r}")
+
+
+def run_seed(master: int, run_index: int) -> int:
+    """The seed of run ``run_index`` (the same at every point)."""
+    return int(np.random.SeedSequence([master, run_index]).generate_state(1)[0])
+
+
+def _one(job: tuple[EyebotSettings, Point, int]) -> Record:
+    s, p, k = job
+    a = arena(p.arena)
+    settings = Settings(
+        footbots=p.footbots,
+        duration=s.duration,
+        deploy_every=p.deploy_every,
+        shortest=p.eyebots == "shortest",
+        weigh=p.eyebots == "weigh",
+        window=min(1000.0, s.duration / 3),
+    )
+    if settings.weigh:  # the reference trip: the shortest way through the eye-bots
+        settings = replace(settings, weigh_reference=a.optimum / settings.motion.speed)
+    rec = run(a, settings, run_seed(s.seed, k))
+    rec.update(point=p.name, eyebots=p.eyebots, run=k, seed=s.seed)
+    return rec
+
+
+def run_points(
+    s: EyebotSettings, pts: list[Point], label: str = ""
+) -> tuple[list[Record], list[Record], float]:
+    """Every run of ``pts``: saved ones read back, missing ones made on ``s.workers``
+    processes and saved as they finish. Returns all records, the fresh ones, and the wall
+    seconds spent making them."""
+    save = s.save
+    have = {p: load_runs(None if save is None else save / f"{p.name}.jsonl", s.seed) for p in pts}
+    jobs = [(s, p, k) for p in pts for k in range(s.runs) if k not in have[p]]
+    records = [r for p in pts for k, r in sorted(have[p].items()) if k < s.runs]
+    t0 = time.monotonic()
+    fresh = run_pool(
+        jobs,
+        _one,
+        workers=s.workers,
+        save_to=None if save is None else (lambda rec: save / f"{rec['point']}.jsonl"),
+        bar=Progress(len(jobs), label, enabled=s.progress and bool(jobs)),
+        status=lambda rec: f"{rec['point']} run {rec['run']}",
+    )
+    records.extend(fresh)
+    return records, fresh, time.monotonic() - t0

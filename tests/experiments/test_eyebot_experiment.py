@@ -1,0 +1,67 @@
+"""The eye-bot runner: its command line, the tables and figures, saved runs that a later
+invocation adds to, and usage errors."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import pytest
+
+from experiments.eyebot import register, run, settings
+from mover.cli import UsageError
+
+
+def _parse(*argv: str) -> argparse.Namespace:
+    parser = argparse.ArgumentParser()
+    register(parser.add_subparsers(dest="cmd"))
+    return parser.parse_args(["eyebot", *argv])
+
+
+def test_the_runner_prints_tables_saves_runs_and_adds_to_them(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    save = tmp_path / "runs"
+    argv = ["--figure", "fig2", "--runs", "1", "--duration", "80", "--seed", "3", "--quiet"]
+    argv += ["--save", str(save), "--out", str(tmp_path / "out"), "--json"]
+    assert run(_parse(*argv)) == 0
+    first = capsys.readouterr().out
+    assert "seed: 3" in first and "Fig. 2, cluttered arena" in first
+    assert "fig2: 12 runs made" in first
+    assert (tmp_path / "out" / "eyebot_fig2.png").stat().st_size > 0
+    # runs of another duration than the paper's are kept apart
+    assert f"runs saved in: {save}-duration=80" in first
+    files = sorted(p.name for p in Path(f"{save}-duration=80").iterdir())
+    assert "cluttered_n1_shortest.jsonl" in files and len(files) == 12
+    # the same seed again makes no run; one more run per point makes 12
+    assert run(_parse(*argv)) == 0
+    again = capsys.readouterr().out
+    assert "fig2: 0 runs made" in again
+
+    def runs(out: str) -> list[dict[str, object]]:
+        return sorted(json.loads(out.splitlines()[-1])["runs"], key=lambda r: str(r["point"]))
+
+    assert runs(first) == runs(again)
+    assert run(_parse(*[a if a != "1" else "2" for a in argv])) == 0
+    assert "fig2: 12 runs made" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--runs", "0"], "--runs must be from 1"),
+        (["--workers", "0"], "--workers must be from 1"),
+        (["--duration", "nan"], "--duration must be from 10"),
+        (["--duration", "1e9"], "--duration must be from 10"),
+    ],
+)
+def test_bad_settings_are_one_line_errors(argv: list[str], message: str) -> None:
+    with pytest.raises(UsageError, match=message):
+        settings(_parse(*argv))
+
+
+def test_an_unknown_figure_is_refused_by_the_parser(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit):
+        _parse("--figure", "fig9")
+    assert "unknown 'fig9'" in capsys.readouterr().err
