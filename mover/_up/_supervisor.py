@@ -240,7 +240,7 @@ class Supervisor:
                 if child.plan.ready_line and text.startswith(child.plan.ready_line):
                     child.said_ready.set()
                 if self.echo:
-                    print(f"{prefix} {text}", flush=True)
+                    _line(f"{prefix} {text}")
             code = await child.proc.wait()
         finally:
             child.log.close()
@@ -269,7 +269,7 @@ class Supervisor:
     def say(self, text: str, *, force: bool = False) -> None:
         """A line of ``mover up``'s own, prefixed ``[up]`` (only with ``echo``, or ``force``)."""
         if self.echo or force:
-            print(f"[{SUPERVISOR}] {text}", flush=True)
+            _line(f"[{SUPERVISOR}] {text}")
 
     # -- waiting -----------------------------------------------------------------------------------
 
@@ -345,20 +345,14 @@ class Supervisor:
                 data = dict(m.data) if isinstance(m.data, dict) else {"data": m.data}
                 member, phase = data.pop("member", m.sender), data.pop("phase", "?")
                 extra = " ".join(f"{k}={_short(v)}" for k, v in data.items())
-                print(
-                    f"[{p.run}] {time.monotonic() - t0:6.1f}s {member}: {phase} {extra}".rstrip(),
-                    flush=True,
-                )
+                _line(f"[{p.run}] {time.monotonic() - t0:6.1f}s {member}: {phase} {extra}".rstrip())
 
         shower = asyncio.create_task(show())
-        print(
-            f"[{p.run}] {p.name} on {', '.join(members)} (program seed {self.seeds.program})",
-            flush=True,
-        )
+        _line(f"[{p.run}] {p.name} on {', '.join(members)} (program seed {self.seeds.program})")
         try:
             outcomes = await self.launch(p.name, members, p.args, run=p.run)
         except MoverError as exc:  # refused: an unknown program, bad arguments, a busy member
-            print(f"[{p.run}] not started: {type(exc).__name__}: {exc}", flush=True)
+            _line(f"[{p.run}] not started: {type(exc).__name__}: {exc}")
             return False
         finally:
             await asyncio.sleep(0.1)  # the last progress reports
@@ -370,14 +364,14 @@ class Supervisor:
         for member, outcome in outcomes.items():
             if "error" in outcome:
                 ok = False
-                print(f"[{p.run}] {member}: FAILED {outcome['error']}", flush=True)
+                _line(f"[{p.run}] {member}: FAILED {outcome['error']}")
                 for line in str(outcome.get("traceback") or "").rstrip().splitlines():
-                    print(f"[{p.run}]   {line}", flush=True)  # a bug in the program: where
+                    _line(f"[{p.run}]   {line}")  # a bug in the program: where
             else:
                 result = json.dumps(outcome.get("result"), default=str)
-                print(f"[{p.run}] {member}: {result}", flush=True)
+                _line(f"[{p.run}] {member}: {result}")
         took = time.monotonic() - t0
-        print(f"[{p.run}] {'ended' if ok else 'FAILED'} after {took:.1f} s", flush=True)
+        _line(f"[{p.run}] {'ended' if ok else 'FAILED'} after {took:.1f} s")
         return ok
 
     # -- stopping ----------------------------------------------------------------------------------
@@ -423,6 +417,20 @@ async def _stop_all(children: list[_Child]) -> None:
         alive = [c for c in alive if c.proc.returncode is None]
         if not alive:
             return
+
+
+_quiet = False  # standard output went away (a closed pipe): the logs still get every line
+
+
+def _line(text: str) -> None:
+    """Print one line of the stream, unless nobody reads it any more."""
+    global _quiet
+    if _quiet:
+        return
+    try:
+        print(text, flush=True)
+    except (BrokenPipeError, OSError):
+        _quiet = True
 
 
 def _signal(child: _Child, sig: int) -> None:
