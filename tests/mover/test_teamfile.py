@@ -218,3 +218,20 @@ def test_the_demo_team_file_checks() -> None:
     assert plan.world is not None and plan.world.lockstep and plan.world.expect == 3
     assert plan.robots() == ["elvis", "ernst", "moseley"]
     assert plan.program is not None and plan.program.name == "search_and_rescue"
+
+
+def test_check_prints_the_plan_and_starts_nothing(tmp_path: Path) -> None:
+    (tmp_path / "t.toml").write_text(GOOD)
+    done = subprocess.run(
+        [sys.executable, "-m", "mover._up", str(tmp_path / "t.toml"), "--check"],
+        capture_output=True, text=True, timeout=30, cwd=ROOT,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    lines = done.stdout.splitlines()
+    assert lines[0] == (
+        f"{tmp_path / 't.toml'}: team 'alpha', 7 members (auto: peer mesh), "
+        f"continuous world {tmp_path / 'arena.toml'}"
+    )
+    assert "  scout: scout, hardware sim (required)" in lines
+    assert "  desk: workstation, hardware none" in lines
+    assert not list((ROOT / "runs").glob("alpha-*"))  # no run folder: nothing started
