@@ -26,7 +26,6 @@ import secrets
 import socket
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import zenoh
@@ -73,9 +72,9 @@ class Team:
         path = os.environ.get("MOVER_TEAM_KEY_FILE")
         if hexkey is None and path:
             try:
-                hexkey = Path(path).read_text().strip()
-            except OSError as exc:
-                raise ConfigError(f"cannot read MOVER_TEAM_KEY_FILE {path!r}: {exc}") from exc
+                hexkey = _read_text(path, 4096).strip()
+            except (OSError, ValueError) as exc:
+                raise ConfigError(f"cannot read MOVER_TEAM_KEY_FILE {path!r}: {exc}") from None
         if not hexkey:
             raise ConfigError(
                 f"no key for team {name!r}: set MOVER_TEAM_KEY (hex) or MOVER_TEAM_KEY_FILE"
@@ -213,11 +212,26 @@ def _knobs_from_env() -> dict[str, Any]:
     return found
 
 
+def _read_text(path: str, limit: int) -> str:
+    """The UTF-8 text of the file at ``path``; ValueError if it is over ``limit`` bytes (a
+    path such as /dev/zero must not fill memory) or not UTF-8."""
+    with open(path, "rb") as f:
+        data = f.read(limit + 1)
+    if len(data) > limit:
+        raise ValueError(f"larger than {limit} bytes")
+    try:
+        return data.decode()
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"not UTF-8 text ({exc.reason})") from None
+
+
 def _read_overrides(path: str) -> dict[str, Any]:
     try:
-        data = json.loads(Path(path).read_text())
+        data = json.loads(_read_text(path, 1 << 20))
+    except RecursionError:
+        raise ConfigError(f"cannot read zenoh settings {path!r}: nested too deeply") from None
     except (OSError, ValueError) as exc:
-        raise ConfigError(f"cannot read zenoh settings {path!r}: {exc}") from exc
+        raise ConfigError(f"cannot read zenoh settings {path!r}: {exc}") from None
     if not isinstance(data, dict):
         raise ConfigError(f"{path}: expected an object of 'path/to/key': value settings")
     return data
