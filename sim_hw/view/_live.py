@@ -6,7 +6,8 @@ one world. For each world session (from the world's appearance in the team to it
 asks the world for its scene (``view.scene``), opens a new rerun recording, and then draws:
 
 * the pymunk world from its state topic (``world/state``: the world's own snapshots, at the
-  rate of ``mover world --state-rate``), only what the world itself sent;
+  rate of ``mover world --state-rate``), only what the world itself sent, at most
+  :data:`MAX_RATE` frames a wall second (a lock-step world can run far faster than real time);
 * a grid world by asking ``view.frame`` :data:`GRID_RATE` times a wall second (a grid world
   streams no state), drawing only rounds it has not drawn.
 
@@ -37,6 +38,10 @@ log = logging.getLogger("sim_hw.view")
 
 GRID_RATE = 5.0
 """Grid frames asked for per wall second."""
+
+MAX_RATE = 30.0
+"""State frames drawn per wall second at most: a lock-step world may run many times faster
+than real time, and a browser shows no more (the newest is drawn, those before it skipped)."""
 
 STATE_QUEUE = 2_000
 """State messages a view keeps unread at most (a slow view drops the oldest)."""
@@ -180,18 +185,24 @@ class LiveView:
         self, node: Node, world: str, drawing: Drawing, rec: rr.RecordingStream, states: Any
     ) -> None:
         refused = 0
-        async for msg in states:
-            if msg.sender != world or not isinstance(msg.data, dict):
+        async for first in states:
+            ours = [m for m in [first, *states.drain()] if m.sender == world]
+            frames = [m.data for m in ours if isinstance(m.data, dict)]
+            if not frames:
                 continue
-            robots = msg.data.get("robots")
+            frame = frames[-1]  # the newest: those that came in between are skipped
+            robots = frame.get("robots")
             if isinstance(robots, dict) and not set(robots) <= drawing.colours.keys():
-                await self._rescene(node, world, drawing)
+                await self._rescene(node, world, drawing)  # once per new robot:
+                for name in sorted(robots):
+                    drawing.colour(name)  # it has its colour now, whatever the world said
             try:
-                log_frame(rec, drawing, msg.data)
+                log_frame(rec, drawing, frame)
             except (KeyError, TypeError, ValueError, IndexError) as exc:
                 refused += 1
                 if refused == 1:
                     log.warning("a state message of %r not drawn: %r", world, exc)
+            await asyncio.sleep(1.0 / MAX_RATE)  # what comes meanwhile waits in the queue
 
     async def _rescene(self, node: Node, world: str, drawing: Drawing) -> None:
         """A robot joined: its radius is in the world's scene now."""

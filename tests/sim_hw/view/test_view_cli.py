@@ -111,3 +111,17 @@ async def test_view_draws_a_grid_world_from_its_frames(tmp_path: Path) -> None:
         assert await asyncio.wait_for(view.wait(), 30) == 0
     paths = {chunk.entity_path for chunk in RrdReader(rrd).stream().to_chunks()}
     assert {"/arena", "/grid/cells", "/robots"} <= paths
+
+
+async def test_a_killed_view_leaves_no_server_behind() -> None:
+    port = free_port()
+    async with cluster(cwd=ROOT) as c, c.launcher():
+        view = await c.start("mover._cli", "view", "--port", str(port), ready="mover view: open")
+        assert _listening(port)
+        view.kill()  # SIGKILL: no clean-up of its own runs
+        await view.wait()
+        for _ in range(50):  # the server gets SIGTERM as its parent dies
+            if not _listening(port):
+                break
+            await asyncio.sleep(0.1)
+        assert not _listening(port)
