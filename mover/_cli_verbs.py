@@ -360,7 +360,7 @@ async def _run(
     kwargs: dict[str, Any],
 ) -> int:
     from ._node import Node
-    from ._programs import launch
+    from ._programs import launch, outcomes
 
     run = args.run_id or f"{args.program}-{secrets.token_hex(3)}"
     async with Node(
@@ -386,18 +386,21 @@ async def _run(
         if robots is None:
             _check_team(team.name, members)
         shower = _progress(node, run)
-        print(f"run {run}: {args.program} on {', '.join(members)}", flush=True)
         try:
-            outcomes = await launch(
+            await launch(
                 node,
                 args.program,
                 members,
                 kwargs,
                 run=run,
-                wait=not args.detach,
+                wait=False,
                 seed=args.seed,
                 share=args.share,
             )
+            # said once every member has started it: from now on they know the run
+            print(f"run {run}: {args.program} on {', '.join(members)}", flush=True)
+            if not args.detach:
+                ends = await outcomes(node, run, members)
         except CallError as exc:
             print(f"mover run: {type(exc).__name__}: {exc}", file=sys.stderr)
             return 1
@@ -408,7 +411,7 @@ async def _run(
         print(f"run {run} started; the members go on without this launcher")
         print(f"follow it with: mover run --attach {run}; end it with: mover cancel {run}")
         return 0
-    return _print_outcomes(outcomes)
+    return _print_outcomes(ends)
 
 
 def _print_outcomes(outcomes: dict[str, dict[str, Any]]) -> int:
