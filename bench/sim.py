@@ -1,21 +1,27 @@
 """Simulated seconds per wall second of the continuous world in lock-step.
 
-    python bench/sim.py [--quick] [--no-procs]
+    python bench/sim.py [--quick] [--no-procs] [--procs 10,50] [--other-topology]
 
 (a) the world alone: 10, 50, 200 in-process robots (8 sonar rays at 10 Hz, no camera, a
 trivial bounce-off-walls controller) through the lock-step WorldServer and the in-process HAL;
 (b) 10 and 50 robot processes (``python -m sim_hw.continuous._walker``) driving a random walk
-through the remote HAL over zenoh on 127.0.0.1, the world hosted in this process. Time is
-counted from the first tick to the last, so process start-up is left out.
+through the remote HAL over zenoh on 127.0.0.1, the world hosted in this process, in the
+topology ``mover up`` picks for a team of that size (``mover._up.needs_router``: the walkers and
+the world as peers of one mesh, or all of them clients of one ``mover router`` process). Time
+is counted from the first tick to the last, so process start-up is left out.
 
 Each process figure is also given as a ratio against the world alone at the same size, from
 the same run: ``procs_efficiency_N = rtf_procs_N / rtf_world_N`` (what the processes and the
 network cost). The same 10 processes also run once with one call per tick instead of frames
 (the exchange before frames), as ``rtf_procs_10_calls`` and ``frames_speedup_10``.
 
+``--other-topology`` also runs each process figure in the other topology
+(``rtf_procs_N_other``, and ``topology_gain_N = rtf_procs_N / rtf_procs_N_other``).
+
 The last line is one JSON object: rtf_world_10, rtf_world_50, rtf_world_200, rtf_procs_10,
-rtf_procs_50, procs_efficiency_10, procs_efficiency_50, rtf_procs_10_calls, frames_speedup_10
-(null where not measured).
+rtf_procs_50, procs_topology_10, procs_topology_50, procs_efficiency_10, procs_efficiency_50,
+rtf_procs_10_calls, frames_speedup_10 (null where not measured), and with --other-topology
+rtf_procs_10_other, rtf_procs_50_other, topology_gain_10, topology_gain_50.
 """
 
 from __future__ import annotations
@@ -27,11 +33,15 @@ import math
 import os
 import sys
 import time
+from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from mover import Node, NodeConfig, Team, free_port  # noqa: E402
+from mover._up import needs_router  # noqa: E402  # the topology rule of `mover up`
 from sim_hw import World, WorldServer, WorldSpec, in_process  # noqa: E402
 from sim_hw._process import serve  # noqa: E402
 
@@ -52,7 +62,7 @@ class _Timer:
         self.last = 0.0
         self.last_t = 0.0
 
-    def __call__(self, world: World, commands: dict) -> None:
+    def __call__(self, world: World, commands: Mapping[str, Mapping[str, Any]]) -> None:
         now = time.perf_counter()
         if self.first is None:
             self.first, self.first_t = now, world.time
@@ -72,6 +82,7 @@ async def world_alone(n: int, seconds: float) -> float:
     async def robot(i: int) -> None:
         hw = await in_process(server, f"r{i:03d}", ROBOT)
         turn = 1.0 if i % 2 else -1.0
+        assert hw.sonar is not None
         for _ in range(ticks):
             ahead = min(hw.sonar.ranges()[0:2])
             hw.drive.set_velocity(0.0 if ahead < 0.3 else 0.4, turn if ahead < 0.3 else 0.0)
@@ -82,22 +93,45 @@ async def world_alone(n: int, seconds: float) -> float:
     return timer.rtf()
 
 
-async def processes(n: int, seconds: float, *, frames: bool = True) -> float:
-    """Real-time factor of n walker processes on the remote HAL."""
-    from mover import Node, NodeConfig, Team, free_port
-
+async def processes(n: int, seconds: float, *, frames: bool = True, router: bool) -> float:
+    """Real-time factor of n walker processes on the remote HAL (``router``: every process,
+    the world's included, a client of one router process; else a peer mesh)."""
     team, port = Team.generate("bench"), free_port()
+    endpoint = f"tcp/127.0.0.1:{port}"
     timer = _Timer()
     server = WorldServer(World(_arena(n), seed=1), expect=n, on_tick=timer, timeout=10.0)
-    env = dict(
-        os.environ,
-        **team.env(),
-        MOVER_MODE="peer",
-        MOVER_LISTEN="tcp/127.0.0.1:0",
-        MOVER_CONNECT=f"tcp/127.0.0.1:{port}",
-    )
-    config = NodeConfig(listen=(f"tcp/127.0.0.1:{port}",))
+    if router:
+        config = theirs = NodeConfig(mode="client", listen=(), connect=(endpoint,))
+    else:
+        config, theirs = NodeConfig(listen=(endpoint,)), NodeConfig(connect=(endpoint,))
+    env = dict(os.environ, **team.env(), **theirs.env())
     ticks = round(seconds / 0.1)
+    hub = None
+    if router:
+        hub = await asyncio.create_subprocess_exec(
+            sys.executable, "-m", "mover", "router", "--listen", endpoint,
+            env=env, cwd=ROOT, stdout=asyncio.subprocess.PIPE,
+        )  # fmt: skip
+        assert hub.stdout is not None
+        await asyncio.wait_for(hub.stdout.readline(), 30)  # it listens
+    try:
+        return await _walk(n, ticks, frames, team, config, env, server, timer)
+    finally:
+        if hub is not None:
+            hub.kill()
+            await hub.wait()
+
+
+async def _walk(
+    n: int,
+    ticks: int,
+    frames: bool,
+    team: Team,
+    config: NodeConfig,
+    env: dict[str, str],
+    server: WorldServer,
+    timer: _Timer,
+) -> float:
     async with Node("world", team=team, kind="world", config=config) as node:
         serve(node, server, frames=frames)
         procs = [
@@ -136,28 +170,43 @@ async def processes(n: int, seconds: float, *, frames: bool = True) -> float:
     return timer.rtf()
 
 
-async def main(args: argparse.Namespace) -> dict[str, float | None]:
+async def main(args: argparse.Namespace) -> dict[str, Any]:
     scale = 0.3 if args.quick else 1.0
-    out: dict[str, float | None] = {}
+    out: dict[str, Any] = {}
     world: dict[int, float] = {}
     for n, seconds in ((10, 60.0), (50, 30.0), (200, 10.0)):
         rtf = world[n] = await world_alone(n, seconds * scale)
         out[f"rtf_world_{n}"] = round(rtf, 1)
         print(f"world alone, {n:3d} robots: {rtf:7.1f}x real time", flush=True)
+    sizes = {int(x) for x in args.procs.split(",")}
     for n, seconds in ((10, 30.0), (50, 10.0)):
         key = f"rtf_procs_{n}"
+        if n not in sizes:  # not asked for
+            out[key] = out[f"procs_efficiency_{n}"] = None
+            continue
+        router = needs_router(n + 1)  # the walkers and the world
+        out[f"procs_topology_{n}"] = "router" if router else "peer"
         if args.no_procs:
             out[key] = out[f"procs_efficiency_{n}"] = None
             print(f"{n} robot processes: not measured (--no-procs)")
             continue
-        rtf = await processes(n, seconds * scale)
+        rtf = await processes(n, seconds * scale, router=router)
         out[key] = round(rtf, 1)
         eff = rtf / world[n]
         out[f"procs_efficiency_{n}"] = round(eff, 3)
-        print(f"{n:3d} robot processes: {rtf:7.1f}x real time ({eff:.3f} of the world alone)")
+        print(
+            f"{n:3d} robot processes ({out[f'procs_topology_{n}']}): {rtf:7.1f}x real time "
+            f"({eff:.3f} of the world alone)",
+            flush=True,
+        )
+        if args.other_topology:
+            other = await processes(n, seconds * scale, router=not router)
+            out[f"rtf_procs_{n}_other"] = round(other, 1)
+            out[f"topology_gain_{n}"] = round(rtf / other, 2)
+            print(f"{n:3d} robot processes, the other topology: {other:7.1f}x real time")
     out["rtf_procs_10_calls"] = out["frames_speedup_10"] = None
-    if not args.no_procs:
-        calls = await processes(10, 30.0 * scale, frames=False)
+    if not args.no_procs and 10 in sizes:
+        calls = await processes(10, 30.0 * scale, frames=False, router=needs_router(11))
         out["rtf_procs_10_calls"] = round(calls, 1)
         assert out["rtf_procs_10"] is not None
         out["frames_speedup_10"] = round(float(out["rtf_procs_10"]) / calls, 2)
@@ -169,5 +218,13 @@ if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="30 % of the simulated durations")
     parser.add_argument("--no-procs", action="store_true", help="skip the multi-process runs")
+    parser.add_argument(
+        "--procs", default="10,50", help="process counts to run: 10, 50 or both (default)"
+    )
+    parser.add_argument(
+        "--other-topology",
+        action="store_true",
+        help="also run each process figure in the topology mover up does not pick",
+    )
     result = asyncio.run(main(parser.parse_args()))
     print(json.dumps(result))
