@@ -216,7 +216,7 @@ async def main(args: argparse.Namespace) -> dict[str, Any]:
 
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="30 % of the simulated durations")
+    parser.add_argument("--quick", action="store_true", help="30 %% of the simulated durations")
     parser.add_argument("--no-procs", action="store_true", help="skip the multi-process runs")
     parser.add_argument(
         "--procs", default="10,50", help="process counts to run: 10, 50 or both (default)"
