@@ -856,6 +856,8 @@ class TaskTeam:
         return metrics
 
     async def _designated(self) -> str:
+        if self.members == [self.me]:
+            return self.me  # a team of one needs no links
         if not self.node.connected():  # never choose while cut off: every view is empty
             await self._recover(self.members)
         alive = [m for m in self.members if m == self.me or m in self.node.team]

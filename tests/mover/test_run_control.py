@@ -17,6 +17,7 @@ from typing import Any
 import pytest
 
 from mover import Node, Refused, TaskTeam, launch
+from mover._programs import outcomes
 from mover._tasks import seed_of
 from tests.helpers.procs import ROOT, Cluster, cluster
 
@@ -224,3 +225,75 @@ async def test_bad_run_control_inputs_get_one_line_and_exit_2(
     assert proc.returncode == 2, text
     assert "Traceback" not in text
     assert len([x for x in err.decode().splitlines() if x.startswith("mover") and said in x]) == 1
+
+
+# -- the host's clock (in-process nodes) ----------------------------------------------------------
+
+
+class CountingClock:
+    """A :class:`mover.RunClock` that counts engages and releases."""
+
+    def __init__(self) -> None:
+        self.calls: list[str] = []
+
+    def now(self) -> float:
+        return 1.5
+
+    async def passed(self, t: float) -> None:
+        return None
+
+    async def engage(self) -> None:
+        self.calls.append("engage")
+
+    def release(self) -> None:
+        self.calls.append("release")
+
+
+async def test_the_host_engages_its_clock_per_run_and_releases_it_after_the_last() -> None:
+    from mover import NodeConfig, ProgramHost, RunTeam, Team, free_port
+
+    gate = asyncio.Event()
+
+    async def wait_gate(robot: None, team: RunTeam) -> float:
+        await gate.wait()
+        assert team.clock is not None and team.simulated  # every member has a clock
+        return team.clock.now()
+
+    async def fail(robot: None, team: RunTeam) -> None:
+        raise RuntimeError("on purpose")
+
+    port = free_port()
+    async with Node(
+        "h", Team.generate("t"), config=NodeConfig(listen=(f"tcp/127.0.0.1:{port}",))
+    ) as node:
+        host = ProgramHost(node, {"wait_gate": wait_gate, "fail": fail}, robot=None)
+        clock = host.clock = CountingClock()
+        for program, run in (("fail", "f1"), ("wait_gate", "w1")):
+            if program == "wait_gate":
+                gate.set()
+            outcome = await launch(node, program, ["h"], {}, run=run)
+            assert list(outcome["h"]) == (
+                ["error", "steps", "traceback"] if run == "f1" else ["result", "steps"]
+            )
+        assert clock.calls == ["engage", "release"] * 2  # a failed run releases it too
+
+        gate.clear()  # two shared runs: one engage, one release after the last
+        await launch(node, "wait_gate", ["h"], {}, run="s1", wait=False, share=True)
+        await launch(node, "wait_gate", ["h"], {}, run="s2", wait=False, share=True)
+        await asyncio.sleep(0.2)
+        assert clock.calls[4:] == ["engage"]
+        cancelled = await host.cancel("s1", "the test")
+        assert cancelled["error"] == "cancelled by the test"
+        assert clock.calls[4:] == ["engage"]  # s2 still runs
+        await launch(node, "wait_gate", ["h"], {}, run="s3", wait=False, share=True)
+        gate.set()
+        ends = await outcomes(node, "s2", ["h"]), await outcomes(node, "s3", ["h"])
+        assert [e["h"]["result"] for e in ends] == [1.5, 1.5]
+        assert clock.calls[4:] == ["engage", "release"]
+        assert [r["state"] for r in host.status()] == [
+            "failed",
+            "done",
+            "cancelled",
+            "done",
+            "done",
+        ]
