@@ -77,25 +77,43 @@ def comma_list(
 
 
 class Progress:
-    """A progress bar on one stderr line: ``label [####....] done/total eta status``.
-
-    Redrawn at most twice a second (and always at the end), so that a fast loop does not spend
-    its time writing to the terminal.
+    """Progress on stderr: on a terminal, a bar on one line (``label [####....] done/total eta
+    status``) redrawn at most twice a second; elsewhere (a log file, CI) plain lines, one at
+    each tenth of the work done or every 30 s, whichever comes first.
     """
 
-    def __init__(self, total: int, label: str = "", width: int = 30, enabled: bool = True) -> None:
+    def __init__(
+        self,
+        total: int,
+        label: str = "",
+        width: int = 30,
+        enabled: bool = True,
+        terminal: bool | None = None,
+    ) -> None:
         self.total, self.label, self.width, self.enabled = total, label, width, enabled
+        self.terminal = sys.stderr.isatty() if terminal is None else terminal
         self.t0 = time.monotonic()
         self._drawn = -math.inf
+        self._tenth = 0
 
     def update(self, done: int, status: str = "", force: bool = False) -> None:
         """Show ``done`` of ``total`` with ``status`` after it."""
+        if not self.enabled:
+            return
         now = time.monotonic()
-        if not self.enabled or (not force and now - self._drawn < 0.5):
+        eta = (now - self.t0) / max(done, 1) * max(self.total - done, 0)
+        if not self.terminal:
+            tenth = 10 * min(done, self.total) // max(self.total, 1)
+            if force or tenth > self._tenth or now - self._drawn >= 30.0:
+                self._tenth, self._drawn = tenth, now
+                label = f"{self.label}: " if self.label else ""
+                sys.stderr.write(f"{label}{done}/{self.total} done, eta {eta:.0f} s  {status}\n")
+                sys.stderr.flush()
+            return
+        if not force and now - self._drawn < 0.5:
             return
         self._drawn = now
         fill = int(self.width * min(done, self.total) / max(self.total, 1))
-        eta = (now - self.t0) / max(done, 1) * max(self.total - done, 0)
         label = f"{self.label:<22} " if self.label else ""
         sys.stderr.write(
             f"\r{label}[{'#' * fill}{'.' * (self.width - fill)}] {done:>4}/{self.total:<4}"
@@ -104,10 +122,11 @@ class Progress:
         sys.stderr.flush()
 
     def close(self, done: int, status: str = "") -> None:
-        """Draw the last state and end the line."""
+        """Draw the last state (and end the bar's line)."""
         if self.enabled:
             self.update(done, status, force=True)
-            sys.stderr.write("\n")
+            if self.terminal:
+                sys.stderr.write("\n")
 
 
 def runner_parser(

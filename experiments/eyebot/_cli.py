@@ -12,6 +12,7 @@ from pathlib import Path
 from mover.cli import UsageError
 
 from .._common import comma_list, runner_parser
+from .._figures import add_figure_arguments
 from . import _report
 from ._sweep import FIGURES, EyebotSettings, points, run_points
 
@@ -51,9 +52,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         help="per-point JSON-lines directory, read back and added to (default results/eyebot/runs)",
     )
     parser.add_argument("--no-save", action="store_true", help="keep no per-point files")
-    parser.add_argument("--out", type=Path, default=Path("out"), help="figure directory")
-    parser.add_argument("--format", choices=("png", "svg", "pdf"), default="png")
-    parser.add_argument("--no-plots", action="store_true", help="skip the figures")
+    add_figure_arguments(parser)
     parser.add_argument("--json", action="store_true", help="end with one JSON line of every run")
     parser.add_argument("--quiet", action="store_true", help="no progress line")
     parser.set_defaults(func=run)

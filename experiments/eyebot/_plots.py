@@ -1,5 +1,5 @@
 """The eye-bot experiment's figures, like the paper's Fig. 2-5; matplotlib (Agg), imported only
-when plotting. Error bars are one standard deviation, as the paper's."""
+when plotting. Error bars are one standard deviation, as the paper's (the legends say so)."""
 
 from __future__ import annotations
 
@@ -7,26 +7,18 @@ from pathlib import Path
 
 import numpy as np
 
+from .._figures import count_axis, legend, pyplot, save
 from ._report import BINS, Records, fig3_panels, fig4_panels, histogram
 
 
 def plot(figure: str, records: Records, out: Path, fmt: str = "png") -> Path | None:
     """Write ``eyebot_<figure>.<fmt>``; None when the records have nothing to draw."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    out.mkdir(parents=True, exist_ok=True)
+    plt = pyplot()
     draw = {"fig2": _fig2, "fig3": _hists, "fig4": _hists, "fig5": _fig5, "beyond": _beyond}
     fig = draw[figure](plt, records, figure)
     if fig is None:
         return None
-    path = out / f"eyebot_{figure}.{fmt}"
-    fig.tight_layout()
-    fig.savefig(path, dpi=150)
-    plt.close(fig)
-    return path
+    return save(fig, out, f"eyebot_{figure}", fmt)
 
 
 def _fig2(plt, records: Records, _figure: str):  # type: ignore[no-untyped-def]
@@ -58,9 +50,9 @@ def _fig2(plt, records: Records, _figure: str):  # type: ignore[no-untyped-def]
         return None
     ax.set_xlabel("foot-bots")
     ax.set_ylabel("time (simulated s)")
-    ax.set_title("Fig. 2: travel times, cluttered arena (error bars: 1 sd)", fontsize=9)
-    ax.xaxis.get_major_locator().set_params(integer=True)
-    ax.legend(fontsize=8)
+    ax.set_title("Fig. 2: travel times, cluttered arena", fontsize=9)
+    count_axis(ax, sorted({r["footbots"] for r in rows}))
+    legend(ax, "sd", fontsize=8, title_fontsize=8)
     ax.grid(alpha=0.3)
     return fig
 
@@ -102,7 +94,7 @@ def _fig5(plt, records: Records, _figure: str):  # type: ignore[no-untyped-def]
     ax.set_xlabel("ρ")
     ax.set_ylabel("t_a (simulated s)")
     ax.set_title("Fig. 5: travel time against ρ, equal corridors", fontsize=9)
-    ax.legend(fontsize=8)
+    legend(ax, None, fontsize=8)
     ax.grid(alpha=0.3)
     return fig
 
@@ -126,8 +118,8 @@ def _beyond(plt, records: Records, _figure: str):  # type: ignore[no-untyped-def
             )
     ax.set_xlabel("foot-bots")
     ax.set_ylabel("t_a (simulated s)")
-    ax.set_title("Beyond the paper: r = 1.5 (error bars: 1 sd)", fontsize=9)
-    ax.xaxis.get_major_locator().set_params(integer=True)
-    ax.legend(fontsize=8)
+    ax.set_title("Beyond the paper: unequal corridors, r = 1.5", fontsize=9)
+    count_axis(ax, sorted({r["footbots"] for r in rows}))
+    legend(ax, "sd", fontsize=8, title_fontsize=8)
     ax.grid(alpha=0.3)
     return fig

@@ -13,6 +13,7 @@ from mover.cli import UsageError
 from robots.foraging import TRAIL_COLOURS
 
 from .._common import comma_list, runner_parser
+from .._figures import add_figure_arguments
 from ._model import load_times, model_rows, paper_times, pooled, report
 from ._paper import PAPER_T1, PAPER_T2, PAPER_T3
 from ._plots import plot
@@ -108,7 +109,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         help="--table model: also fit our times stored in these runner outputs (repeatable)",
     )
     p.add_argument("--json", action="store_true", help="end with one JSON line of every mean")
-    p.add_argument("--out", default="out", help="directory for the PNG plots (out/)")
+    add_figure_arguments(p)
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
 
@@ -155,7 +156,8 @@ def settings(args: argparse.Namespace) -> ForagingSettings:
         climb_any=args.climb_any,
         agent_seeds=args.agent_seeds,
         fit=tuple(fits),
-        out=Path(args.out),
+        out=None if args.no_plots else Path(args.out),
+        format=args.format,
         quiet=args.quiet,
         json=args.json,
     )
@@ -220,7 +222,13 @@ def _table(t: str, s: ForagingSettings) -> tuple[str, dict[str, Any], list[Row],
             "paper": [PAPER_T1.get(n, (math.nan,))[0] for n in xs],
             "ours": [r.mean for r in rows],
         }
-        return text, figures, rows, plot(s.out, "table1", xs, series, "agents", "Table 1 (Setup 1)")
+        errors = {"ours": [r.stats.se for r in rows]}
+        return (
+            text,
+            figures,
+            rows,
+            _plot(s, "table1", xs, series, errors, "agents", "Table 1 (Setup 1)"),
+        )
     if t == "2":
         xs, rows = table2_rows(s)
         text, figures = table2(xs, rows, s.seed)
@@ -230,12 +238,34 @@ def _table(t: str, s: ForagingSettings) -> tuple[str, dict[str, Any], list[Row],
             "ours measured": [r.mean for r in rows],
             "ours projected V_ref/n": [vref / n for n in xs],
         }
-        return text, figures, rows, plot(s.out, "table2", xs, series, "agents", "Table 2 (Setup 2)")
+        errors = {"ours measured": [r.stats.se for r in rows]}
+        return (
+            text,
+            figures,
+            rows,
+            _plot(s, "table2", xs, series, errors, "agents", "Table 2 (Setup 2)"),
+        )
     sizes, got = table3_rows(s, ("cmarking", "ants") if t == "ants" else ("cmarking",))
     text, figures = table3(sizes, got, s.seed)
     cells = [z * z for z in sizes]
     series = {"paper c-marking": [PAPER_T3.get(round(math.sqrt(x)), math.nan) for x in cells]}
     series.update({f"ours {k}": [r.mean for r in v] for k, v in got.items()})
+    errors = {f"ours {k}": [r.stats.se for r in v] for k, v in got.items()}
     name = "fig9" if t == "ants" else "table3"
     rows = [r for rs in got.values() for r in rs]
-    return text, figures, rows, plot(s.out, name, cells, series, "cells", "Setup 3, 50 agents")
+    title = "Table 3 (Setup 3), 50 agents"
+    return text, figures, rows, _plot(s, name, cells, series, errors, "cells", title)
+
+
+def _plot(
+    s: ForagingSettings,
+    name: str,
+    xs: list[int],
+    series: dict[str, list[float]],
+    errors: dict[str, list[float]],
+    xlabel: str,
+    title: str,
+) -> Path | None:
+    if s.out is None:
+        return None
+    return plot(s.out, name, xs, series, errors, xlabel, title, s.format)

@@ -39,7 +39,8 @@ class ForagingSettings:
     agent_seeds: int = 1
     #: ``model``: our stored times to fit beside the paper's, as (label, files) pairs.
     fit: tuple[tuple[str, tuple[str, ...]], ...] = ()
-    out: Path = Path("out")
+    out: Path | None = Path("out")
+    format: str = "png"
     quiet: bool = False
     json: bool = False
 

@@ -13,6 +13,7 @@ from mover.cli import UsageError
 from robots.library import METHODS, LevyParams
 
 from .._common import comma_list, runner_parser
+from .._figures import add_figure_arguments
 from ._paper import ALPHA_TARGETS, ALPHAS, FIG8_TARGETS, FIG9_ROBOTS, Setup
 from ._report import paired, saturation, speed, table, theory
 from ._settings import LevySettings
@@ -90,8 +91,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         help="per-point JSON-lines directory, read back and added to (default results/levy/runs)",
     )
     parser.add_argument("--no-save", action="store_true", help="keep no per-point files")
-    parser.add_argument("--out", type=Path, default=Path("out"), help="plot directory")
-    parser.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
+    add_figure_arguments(parser)
     parser.add_argument(
         "--json", action="store_true", help="end with one JSON line holding every run"
     )
@@ -146,6 +146,7 @@ def settings(args: argparse.Namespace) -> LevySettings:
         setup=setup,
         save=save,
         out=None if args.no_plots else args.out,
+        format=args.format,
         json=args.json,
         progress=not args.quiet,
     )
@@ -176,7 +177,7 @@ def run(args: argparse.Namespace) -> int:
         if s.out is not None:
             from ._plots import plot
 
-            print(f"wrote {plot(sweep, records, s.setup, s.out)}")
+            print(f"wrote {plot(sweep, records, s.setup, s.out, s.format)}")
     if s.json:
         print(json.dumps({"seed": s.seed, "runs": everything}))
     return 0

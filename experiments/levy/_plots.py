@@ -10,6 +10,7 @@ import numpy as np
 
 from robots.library import stable_alpha
 
+from .._figures import count_axis, legend, pyplot, save
 from ._paper import ALPHA_TARGETS, ORDER, Setup
 from ._report import Records, estimate, times
 
@@ -21,15 +22,10 @@ _TITLES = {
 }
 
 
-def plot(sweep: str, records: Records, setup: Setup, out: Path) -> Path:
-    """Write ``levy_<sweep>.png``: mean search time ± se per method."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+def plot(sweep: str, records: Records, setup: Setup, out: Path, fmt: str = "png") -> Path:
+    """Write ``levy_<sweep>.<fmt>``: mean search time ± se per method."""
+    plt = pyplot()
     key = _LABELS[sweep]
-    out.mkdir(parents=True, exist_ok=True)
     fig, ax = plt.subplots(figsize=(5.5, 3.8))
     for m in ORDER:
         mine = [r for r in records if r["method"] == m]
@@ -46,18 +42,15 @@ def plot(sweep: str, records: Records, setup: Setup, out: Path) -> Path:
         if lone and len(ns) > 1:
             t1 = float(np.mean(times(lone, setup.max_time)))
             ax.plot(ns, [t1 / n for n in ns], "k:", lw=1, label="L: T(1)/n")
-        ax.set_xscale("log")
         ax.set_yscale("log")
+    if sweep != "alpha":
+        count_axis(ax, sorted({r[key] for r in records}), log=sweep == "fig9")
     if sweep == "alpha":
         mu = estimate(setup, ALPHA_TARGETS)[1]
         ax.axvline(stable_alpha(mu), color="k", ls=":", lw=1, label="eq. 4-5 (non-destructive)")
     ax.set_xlabel(key)
     ax.set_ylabel("time to find all targets (s)")
     ax.set_title(_TITLES[sweep], fontsize=9)
-    ax.legend(fontsize=8)
+    legend(ax, "se", fontsize=8, title_fontsize=8)
     ax.grid(alpha=0.3)
-    fig.tight_layout()
-    path = out / f"levy_{sweep}.png"
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return save(fig, out, f"levy_{sweep}", fmt)

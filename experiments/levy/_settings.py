@@ -29,8 +29,8 @@ class LevySettings:
 
     ``save``: the directory of per-point JSON-lines files, appended as runs finish and read
     back so that a later run with the same seed only adds the runs missing (None: keep
-    nothing); ``out``: the figures' directory (None: none); ``json``: end with one JSON line
-    of every run.
+    nothing); ``out``: the figures' directory (None: none), ``format`` theirs; ``json``: end
+    with one JSON line of every run.
     """
 
     seed: int
@@ -44,5 +44,6 @@ class LevySettings:
     setup: Setup = field(default_factory=Setup)
     save: Path | None = None
     out: Path | None = None
+    format: str = "png"
     json: bool = False
     progress: bool = True

@@ -13,6 +13,7 @@ from robots.explore import EXCHANGES, METHODS
 from sim_hw.grid import MazeFileError, load_maze
 
 from .._common import comma_list, runner_parser
+from .._figures import add_figure_arguments
 from ._paper import AGENT_COUNTS, PROBABILITIES, SIZE
 from ._report import composite, composite_text, tables
 from ._settings import MazeSettings
@@ -60,8 +61,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         " 1: the paper's single exchange)",
     )
     parser.add_argument("--maze", type=Path, default=None, help="run on this maze JSON file")
-    parser.add_argument("--out", type=Path, default=Path("out"), help="plot directory")
-    parser.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
+    add_figure_arguments(parser)
     parser.add_argument(
         "--load",
         type=Path,
@@ -106,6 +106,7 @@ def settings(args: argparse.Namespace) -> MazeSettings:
         maze=maze,
         maze_path=args.maze,
         out=None if args.no_plots else args.out,
+        format=args.format,
         load=tuple(args.load),
         json=args.json,
     )
@@ -124,7 +125,7 @@ def run(args: argparse.Namespace) -> int:
         + f"  exchanges: {s.exchanges}"
     )
     records = trials(s)
-    _report(records, list(s.methods), list(s.agents), s.out)
+    _report(records, list(s.methods), list(s.agents), s)
     if s.json:
         print(json.dumps({"seed": s.seed, "size": s.size, "runs": records}))
     return 0
@@ -143,18 +144,18 @@ def _report_saved(s: MazeSettings) -> int:
         )
     methods = [m for m in s.methods if any(r["method"] == m for r in records)]
     agents = [n for n in s.agents if any(r["agents"] == n for r in records)]
-    _report(records, methods, agents, s.out)
+    _report(records, methods, agents, s)
     return 0
 
 
 def _report(
-    records: list[dict[str, Any]], methods: list[str], agents: list[int], out: Path | None
+    records: list[dict[str, Any]], methods: list[str], agents: list[int], s: MazeSettings
 ) -> None:
     print(tables(records, methods, agents))
     scores = composite(records, methods, agents)
     print(composite_text(scores, agents))
-    if out is not None:
+    if s.out is not None:
         from ._plots import plots
 
-        for path in plots(records, scores, methods, agents, out):
+        for path in plots(records, scores, methods, agents, s.out, s.format):
             print(f"wrote {path}")

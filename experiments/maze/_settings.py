@@ -29,6 +29,7 @@ class MazeSettings:
     maze: Maze | None = None
     maze_path: Path | None = None
     out: Path | None = None
+    format: str = "png"
     load: tuple[Path, ...] = ()
     json: bool = False
 

@@ -39,7 +39,7 @@ def test_plus_minus_formats() -> None:
 
 
 def test_progress_draws_on_stderr_and_ends_the_line(capsys: pytest.CaptureFixture[str]) -> None:
-    bar = Progress(4, "table2", width=8)
+    bar = Progress(4, "table2", width=8, terminal=True)
     for k in range(1, 5):
         bar.update(k, f"run {k}")
     bar.close(4, "done")
@@ -49,3 +49,14 @@ def test_progress_draws_on_stderr_and_ends_the_line(capsys: pytest.CaptureFixtur
     assert err.rstrip().endswith("done") and "[########]    4/4" in err and err.endswith("\n")
     Progress(4, enabled=False).close(4)
     assert capsys.readouterr().err == ""
+
+
+def test_progress_off_a_terminal_is_plain_lines(capsys: pytest.CaptureFixture[str]) -> None:
+    bar = Progress(20, "fig2", terminal=False)
+    for k in range(1, 21):
+        bar.update(k, f"run {k}")
+    bar.close(20, "done")
+    lines = capsys.readouterr().err.splitlines()
+    assert "\r" not in "".join(lines) and "[" not in "".join(lines)
+    assert lines[0].startswith("fig2: 1/20 done") and lines[-1].startswith("fig2: 20/20 done")
+    assert len(lines) == 12  # the first, one a tenth of the work, and the last again at close
