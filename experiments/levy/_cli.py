@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import secrets
 import time
 from dataclasses import replace
@@ -19,6 +20,8 @@ from ._report import paired, saturation, speed, table, theory
 from ._settings import LevySettings
 from ._sweep import SWEEPS, points, run_points
 
+MAX_TIME = 1e6
+"""The longest censoring time a run may be given (simulated s)."""
 _KEYS = {"fig8": "targets", "fig9": "robots", "alpha": "alpha"}
 _TITLES = {
     "fig8": "search time (s) vs number of targets, 10 robots (Fig. 8)",
@@ -108,11 +111,18 @@ def settings(args: argparse.Namespace) -> LevySettings:
         raise UsageError("--targets and --robots must be positive")
     if not all(0 < a <= 2 for a in [*args.alphas, args.alpha]):
         raise UsageError("--alpha and --alphas must be in (0, 2]")
-    numbers = (args.max_time, args.scale, args.cap, args.fixed, args.rho0, args.signature_range)
-    if min(numbers) <= 0 or min(args.k_rep, args.k_sig) < 0:
+    numbers = (args.max_time, args.scale, args.fixed, args.rho0, args.signature_range)
+    gains = (args.k_rep, args.k_sig)
+    if (
+        not all(math.isfinite(x) and x > 0 for x in numbers)
+        or not all(math.isfinite(k) and k >= 0 for k in gains)
+        or not (args.cap > 0 and not math.isnan(args.cap))
+        or args.max_time > MAX_TIME
+    ):
         raise UsageError(
-            "--max-time, --scale, --cap, --fixed, --rho0 and --signature-range must be"
-            " positive, --k-rep and --k-sig not negative"
+            f"--max-time (at most {MAX_TIME:g} s), --scale, --fixed, --rho0 and"
+            " --signature-range must be positive and finite, --cap positive (inf: no cap),"
+            " --k-rep and --k-sig finite and not negative"
         )
     walk = replace(
         LevyParams(),
