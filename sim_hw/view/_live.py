@@ -46,6 +46,9 @@ than real time, and a browser shows no more (the newest is drawn, those before i
 STATE_QUEUE = 2_000
 """State messages a view keeps unread at most (a slow view drops the oldest)."""
 
+SILENT_WAIT = 2.0
+"""Seconds a view looks for its world before it says it waits (the team takes a moment)."""
+
 FLUSH_TIMEOUT = 5.0
 """Seconds a recording has to send what is left when it closes."""
 
@@ -121,11 +124,12 @@ class LiveView:
 
     async def _wait_for_world(self, node: Node) -> str:
         said = False
+        quiet_until = asyncio.get_running_loop().time() + SILENT_WAIT
         while True:
             found = self._find(node)
             if found is not None:
                 return found
-            if not said:
+            if not said and asyncio.get_running_loop().time() > quiet_until:
                 who = f"world {self.world!r}" if self.world else "a world"
                 self.say(f"waiting for {who} in team {node.team_name!r}")
                 said = True

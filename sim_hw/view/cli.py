@@ -44,8 +44,10 @@ def register(sub: Any) -> None:
     p = sub.add_parser(
         "view",
         help="see a running world live in a web browser (rerun's viewer)",
-        description=__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description="Show a running world in rerun's web viewer, served from this machine: "
+        "the page to open is printed. The view is an observer of the team from the "
+        "environment (MOVER_TEAM, the key, MOVER_CONNECT), not a member; several views may "
+        "watch one world, each on its own --port. Ctrl-C stops it.",
     )
     p.add_argument(
         "--world",
