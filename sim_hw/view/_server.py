@@ -45,7 +45,7 @@ _PR_SET_PDEATHSIG = 1
 def rerun_binary() -> Path:
     """The ``rerun`` program shipped in the ``rerun-sdk`` wheel (UsageError when missing)."""
     spec = importlib.util.find_spec("rerun_cli")
-    if spec is None or spec.origin is None:
+    if spec is None or spec.origin is None or importlib.util.find_spec("rerun") is None:
         raise UsageError("the viewer needs rerun-sdk: pip install 'mover[view]'")
     exe = Path(spec.origin).parent / "rerun"
     if not exe.is_file():

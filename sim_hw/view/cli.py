@@ -125,10 +125,13 @@ def replay(path: str, *, port: int, bind: str, rrd: str | None = None) -> int:
     """``mover replay FILE``: the recording in the viewer, on its timeline (or saved to ``rrd``)."""
     from sim_hw.continuous._record import read_recording, run_end
 
+    from ._server import rerun_binary
+
     header, ticks = read_recording(path)
     header = {**header, "kind": "continuous"}
     names = {r for t in ticks for r in t.get("robots", {})}
     say = _say("replay")
+    rerun_binary()  # rerun-sdk is there, else one line
     if rrd is not None:
         _log_recording(header, ticks, names, grpc_url=None, save=Path(rrd))
         say(f"{rrd}: {len(ticks)} ticks")
