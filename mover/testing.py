@@ -11,17 +11,20 @@
             outcomes = await launch(node, "my_program", ["ernst", "moseley"], {}, run="t1")
 
 Every process gets a fresh team key and connects to a seed port chosen at run time (multicast
-scouting off); everything started is killed on exit.
+scouting off); everything started is killed on exit, and dies with this process even when it is
+SIGKILLed (Linux: a parent-death signal). ``pytest`` users get the same as fixtures from
+:mod:`mover.pytest_plugin`.
 """
 
 from __future__ import annotations
 
 import asyncio
+import ctypes
 import os
 import signal
 import sys
 from collections.abc import AsyncIterator, Callable, Mapping
-from contextlib import asynccontextmanager
+from contextlib import asynccontextmanager, suppress
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -31,15 +34,44 @@ from ._node import Node
 from ._programs import ProgramHost
 
 
+@dataclass(frozen=True)
+class ProcessExited:
+    """A process of a cluster that exited on its own: its label, exit code and last log lines."""
+
+    label: str
+    returncode: int
+    tail: str = ""
+
+    def __str__(self) -> str:
+        return f"{self.label} exited with code {self.returncode}"
+
+
+def _die_with_parent() -> None:  # pragma: no cover - runs in the child before exec
+    """Linux: ask for SIGKILL when the process that started us dies (PR_SET_PDEATHSIG)."""
+    with suppress(OSError, AttributeError):
+        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL, 0, 0, 0)
+
+
 @dataclass
 class Cluster:
-    """A seed endpoint that every process connects to, and the processes started."""
+    """A seed endpoint that every process connects to, and the processes started.
+
+    With ``logs``, every process's standard error goes to ``<logs>/<label>.log``.
+    """
 
     team: Team
     port: int = field(default_factory=free_port)
     procs: list[asyncio.subprocess.Process] = field(default_factory=list)
     cwd: Path = field(default_factory=Path.cwd)
     env: dict[str, str] = field(default_factory=dict)
+    logs: Path | None = None
+    _labels: dict[int, tuple[str, Path | None]] = field(default_factory=dict)
+    _ended: set[int] = field(default_factory=set)  # ended by the test or by stop()
+    _exits: list[ProcessExited] = field(default_factory=list)
+    _exit_seen: asyncio.Event | None = None
+    _watchers: list[asyncio.Task[None]] = field(default_factory=list)
+    claimed: set[str] = field(default_factory=set)
+    """Labels of exits already reported (by the pytest plugin)."""
 
     @property
     def seed(self) -> NodeConfig:
@@ -66,11 +98,17 @@ class Cluster:
         timeout: float = 30.0,
         config: NodeConfig | None = None,
         log: str | os.PathLike[str] | None = None,
+        label: str | None = None,
     ) -> asyncio.subprocess.Process:
         """Start ``python -m module args``; wait until it prints ``ready`` (None: no wait).
 
-        ``log`` names a file for the process's standard error (its log lines), else it is
-        this process's."""
+        ``log`` names a file for the process's standard error (its log lines); without it, a
+        cluster with ``logs`` writes ``<logs>/<label>.log``, and otherwise it is this
+        process's. ``label`` names the process in reports (default: module and arguments)."""
+        label = label or " ".join([module, *args])[:60]
+        if log is None and self.logs is not None:
+            self.logs.mkdir(parents=True, exist_ok=True)
+            log = self.logs / f"{_file_name(label)}.log"
         env = {**os.environ, **self.env, **(team or self.team).env(), **(config or self.peer).env()}
         # the child gets its own copy of the file: ours is closed at once
         err = open(log, "ab") if log is not None else None  # noqa: ASYNC230, SIM115
@@ -85,11 +123,14 @@ class Cluster:
                 stderr=err,
                 env=env,
                 cwd=self.cwd,
+                preexec_fn=_die_with_parent if sys.platform == "linux" else None,
             )
         finally:
             if err is not None:
                 err.close()
         self.procs.append(proc)
+        self._labels[proc.pid] = (label, Path(log) if log is not None else None)
+        self._watchers.append(asyncio.get_running_loop().create_task(self._watch(proc)))
         if ready is None:
             return proc
         assert proc.stdout is not None
@@ -124,8 +165,42 @@ class Cluster:
             )
         )
 
+    async def _watch(self, proc: asyncio.subprocess.Process) -> None:
+        code = await proc.wait()
+        if proc.pid in self._ended:
+            return
+        label, log = self._labels[proc.pid]
+        self._exits.append(ProcessExited(label, code, _tail(log)))
+        self._exit_event().set()
+
+    def _exit_event(self) -> asyncio.Event:
+        if self._exit_seen is None:
+            self._exit_seen = asyncio.Event()
+        return self._exit_seen
+
+    async def first_exit(self) -> ProcessExited:
+        """Wait until a process exits on its own (not ended by :meth:`kill` or :meth:`stop`)."""
+        await self._exit_event().wait()
+        return self._exits[0]
+
+    def exited(self) -> list[ProcessExited]:
+        """The processes that exited on their own so far."""
+        return list(self._exits)
+
+    def logs_written(self) -> list[tuple[str, Path]]:
+        """(label, log file) of every process that logs to a file."""
+        return [(label, log) for label, log in self._labels.values() if log is not None]
+
+    def kill(self, proc: asyncio.subprocess.Process, sig: int = signal.SIGKILL) -> None:
+        """End ``proc`` on purpose (a test of a lost member, say): its exit is not a failure."""
+        self._ended.add(proc.pid)
+        if proc.returncode is None:
+            with suppress(ProcessLookupError):
+                proc.send_signal(sig)
+
     async def stop(self) -> None:
         """Kill every process started (and wait for them)."""
+        self._ended.update(p.pid for p in self.procs)
         for proc in self.procs:
             if proc.returncode is None:
                 try:
@@ -139,6 +214,22 @@ class Cluster:
                     await proc.wait()
             except TimeoutError:
                 pass
+        for task in self._watchers:
+            task.cancel()
+        await asyncio.gather(*self._watchers, return_exceptions=True)
+
+
+def _file_name(label: str) -> str:
+    return "".join(c if c.isalnum() or c in "-_." else "_" for c in label)[:60]
+
+
+def _tail(log: Path | None, lines: int = 20) -> str:
+    if log is None:
+        return ""
+    try:
+        return "\n".join(log.read_text(errors="replace").splitlines()[-lines:])
+    except OSError:
+        return ""
 
 
 @asynccontextmanager
