@@ -35,7 +35,7 @@ claim before the decision adds two. Without a clock the wall-clock rule above ho
 A member waiting for the decision must keep its hardware ticking (``hw.clock.ticking()``), or a
 lock-step world holds still and the others never pass the claimed time.
 
-Beginning (:meth:`TaskTeam.begin`, a step of kind ``"begin"``, which every run hosted by
+Beginning (:meth:`TaskTeam.begin`, step 0, of kind ``"begin"``, which every run hosted by
 :class:`~mover.ProgramHost` starts with): an AND barrier in which each member reports its
 clock's time, so that all start on the same tick; the members learn whether every one of them
 has a clock (then their ORs are decided in simulated time), and a spread of start times is
@@ -625,7 +625,7 @@ class TaskTeam:
         return self.clock is not None and self._timed is not False
 
     async def begin(self, timeout: float | None = None) -> None:
-        """The barrier a run starts with (a step of kind ``"begin"``): every member reports
+        """The barrier a run starts with (step 0, of kind ``"begin"``): every member reports
         its clock's time and goes on once all have, so that all start on the same tick.
 
         From then on the team's ORs are decided in simulated time if every member has a clock,
@@ -633,7 +633,10 @@ class TaskTeam:
         warning naming the spread). Raises MemberLost if a member is lost, or if not every
         member began within ``timeout`` seconds.
         """
-        metrics = self._begin("begin")
+        if self._step != 0 or any(m.kind == "begin" for m in self.metrics):
+            raise RuntimeError("begin() is a run's first step, and only one")
+        metrics = StepMetrics(0, "begin")  # step 0: the program's own steps count from 1
+        self.metrics.append(metrics)
         now = self.clock.now() if self.clock is not None else None
         try:
             async with asyncio.timeout(timeout):

@@ -93,7 +93,9 @@ async def test_a_launch_seed_reaches_every_member_as_processes() -> None:
         assert first[member]["result"] == {"seed": 7, "draws": [rng.random() for _ in range(3)]}
         assert again[member]["result"] == first[member]["result"]
         assert default[member]["result"]["seed"] == seed_of("d3")
-    assert first["a"]["steps"][0]["kind"] == "begin"  # every run starts with the barrier
+    begins = [o["steps"][0] for o in first.values()]  # every run starts with the barrier
+    assert all(b["step"] == 0 and b["kind"] == "begin" for b in begins)
+    assert sum(b["messages"] for b in begins) == 2  # 2(n-1)
 
 
 async def test_busy_refusal_share_and_cancel(tmp_path: Path) -> None:
