@@ -333,6 +333,9 @@ def _parser() -> argparse.ArgumentParser:
 if __name__ == "__main__":
     arguments = _parser().parse_args()
     if arguments.member:
+        import zenoh
+
+        zenoh.try_init_log_from_env()  # RUST_LOG=warn says why a link closed
         asyncio.run(member(arguments.member, arguments.size))
     else:
         if not 2 <= arguments.members <= 200:
