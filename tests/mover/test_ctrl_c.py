@@ -234,7 +234,7 @@ async def test_ctrl_c_of_a_grid_world_mid_run(tmp_path: Path) -> None:
         await node.team.wait_gone(GRID_WORLD, timeout=5)
 
 
-@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
 async def test_ctrl_c_of_a_router_with_members_behind_it(
     tmp_path: Path, sig: signal.Signals
 ) -> None:
