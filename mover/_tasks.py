@@ -33,7 +33,11 @@ deliveries of the announcement; the same when the designated member wins: n - 1 
 claim sent), at most 4(n - 1) for a long one (polls replace the announcement); each further
 claim before the decision adds two. Without a clock the wall-clock rule above holds, at its cost.
 A member waiting for the decision must keep its hardware ticking (``hw.clock.ticking()``), or a
-lock-step world holds still and the others never pass the claimed time.
+lock-step world holds still and the others never pass the claimed time. Limitation: the losers'
+operations are cancelled when the decision reaches them, on whichever tick that is in wall
+time, so the winner, its result and its finish time repeat run after run, but how far the
+losers went after it does not (a clock that could hold the world until the decision would fix
+that).
 
 Beginning (:meth:`TaskTeam.begin`, step 0, of kind ``"begin"``, which every run hosted by
 :class:`~mover.ProgramHost` starts with): an AND barrier in which each member reports its
