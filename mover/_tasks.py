@@ -67,6 +67,7 @@ taking over waits until every live member has re-joined, which covers the common
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import hashlib
 import logging
 import math
@@ -389,6 +390,21 @@ class Collectives:
         if not future.done():
             future.set_result(local)
 
+    def start_run(self, run: str) -> None:
+        """A run named ``run`` starts here: forget what an earlier run of that name left (its
+        decided steps, heard decisions, operations; that it ended). What other members already
+        sent for the new run stays: it cannot be decided before this member began."""
+        with contextlib.suppress(ValueError):
+            self._ended.remove(run)
+        for key in [k for k, st in self._steps.items() if k[0] == run and st.decision.done()]:
+            del self._steps[key]
+        for key in [k for k, f in self._heard.items() if k[0] == run and f.done()]:
+            del self._heard[key]
+        for key in [k for k in self._local if k[0] == run]:
+            future = self._local.pop(key)
+            if not future.done():
+                future.set_result(None)
+
     def end_run(self, run: str) -> None:
         """Run ``run`` ended here: questions about its steps are answered "out" from now on."""
         self._ended.append(run)
@@ -608,6 +624,8 @@ class TaskTeam:
         self._timed: bool | None = None  # whether every member has a clock (known at begin)
         self.members = sorted(set(members))
         self.collectives = collectives or Collectives(node, policy)
+        if isinstance(self.collectives, Collectives):
+            self.collectives.start_run(run)
         self.stall_timeout = stall_timeout
         self.metrics: list[StepMetrics] = []
         self._step = 0
