@@ -18,7 +18,7 @@ from collections.abc import Sequence
 from importlib.metadata import entry_points
 
 from ._exceptions import ConfigError
-from .cli import UsageError, add_log_arguments, setup_logging
+from .cli import Terminated, UsageError, add_log_arguments, interrupt_on_sigterm, setup_logging
 
 __all__ = ["UsageError", "build_parser", "main"]  # UsageError: its old home, kept for imports
 
@@ -44,12 +44,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``mover`` console script."""
     parser = build_parser()
     args = parser.parse_args(argv)
+    interrupt_on_sigterm()
     try:
         setup_logging(args)
         code = args.func(args)
     except (UsageError, ConfigError) as exc:  # a setting is wrong: one line, no traceback
         print(f"mover {args.verb}: {exc}", file=sys.stderr)
         return 2
+    except Terminated:
+        return 143
     except KeyboardInterrupt:
         return 130
     return int(code or 0)

@@ -87,6 +87,7 @@ class RpcServer:
         self.node = node
         self.exports: dict[str, Exported] = {}
         self.tasks: dict[tuple[str, int], asyncio.Task[None]] = {}
+        self._asked: dict[tuple[str, int], bool] = {}  # calls their caller asked to cancel
 
     def export(self, fn: Callable[..., Any], name: str | None = None) -> None:
         name = name or getattr(fn, _MARK, None) or fn.__name__
@@ -134,6 +135,7 @@ class RpcServer:
 
         def done(_: asyncio.Task[None]) -> None:
             self.tasks.pop((env.sender, env.call_id), None)
+            self._asked.pop((env.sender, env.call_id), None)
             if inspect.iscoroutine(awaitable):
                 awaitable.close()  # a no-op unless cancelled before it ever ran
 
@@ -143,7 +145,10 @@ class RpcServer:
         try:
             result = await awaitable
         except asyncio.CancelledError:
-            self._send(query, env, _err("Cancelled", "the call was cancelled"))
+            # The caller asked for it: say so. Cancelled because this node is closing: say
+            # nothing, the caller sees the callee leave (RobotLost), not an answered error.
+            if self._asked.pop((env.sender, env.call_id), False):
+                self._send(query, env, _err("Cancelled", "the call was cancelled"))
             raise
         except Exception as exc:
             self._send(query, env, self._failure(exported, exc))
@@ -217,6 +222,7 @@ class RpcServer:
         """Cancel one call of ``caller`` (or all of them)."""
         for (who, cid), task in list(self.tasks.items()):
             if who == caller and (call_id is None or cid == call_id):
+                self._asked[(who, cid)] = True
                 task.cancel()
 
 

@@ -21,6 +21,7 @@ import argparse
 import json
 import logging
 import os
+import signal
 import typing
 
 from ._config import NodeConfig, Team
@@ -28,9 +29,11 @@ from ._keys import check_name as _check_name
 
 __all__ = [
     "LOG_LEVEL_ENV",
+    "Terminated",
     "UsageError",
     "add_log_arguments",
     "add_team_arguments",
+    "interrupt_on_sigterm",
     "json_argument",
     "json_object",
     "member_name",
@@ -38,6 +41,24 @@ __all__ = [
     "setup_logging",
     "team_from_args",
 ]
+
+
+class Terminated(KeyboardInterrupt):
+    """The process was sent SIGTERM: it ends as on Ctrl-C (its ``finally`` blocks run)."""
+
+
+def interrupt_on_sigterm() -> None:
+    """Make SIGTERM end this process the way Ctrl-C does (:class:`Terminated`, a
+    ``KeyboardInterrupt``): asyncio cancels the main task, every ``finally`` runs, and the
+    command exits with one line at most and status 143. A handler set already is kept."""
+    if signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL:
+        return
+
+    def terminated(signum: int, frame: typing.Any) -> None:
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)  # a second SIGTERM ends it at once
+        raise Terminated()
+
+    signal.signal(signal.SIGTERM, terminated)
 
 
 def json_argument(text: str, what: str) -> typing.Any:

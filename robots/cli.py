@@ -20,9 +20,11 @@ from typing import Any
 
 from mover import ConfigError, NameTaken
 from mover.cli import (
+    Terminated,
     UsageError,
     add_log_arguments,
     add_team_arguments,
+    interrupt_on_sigterm,
     json_object,
     setup_logging,
     team_from_args,
@@ -146,11 +148,14 @@ def main() -> int:
     add_arguments(p)
     add_log_arguments(p)
     args = p.parse_args()
+    interrupt_on_sigterm()
     try:
         setup_logging(args, default="INFO")
         return run(args)
     except (UsageError, ConfigError) as exc:
         print(f"robots: {exc}", file=sys.stderr)
         return 2
+    except Terminated:
+        return 143
     except KeyboardInterrupt:
         return 130

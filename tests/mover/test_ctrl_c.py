@@ -165,12 +165,6 @@ async def test_ctrl_c_of_a_robot_mid_run(interrupted_run: dict[str, Any]) -> Non
         assert "error" in end, interrupted_run["outcomes"]
 
 
-@pytest.mark.xfail(
-    strict=False,  # a race: some runs the leave event comes first and MemberLost is raised
-    reason="the rest get RemoteError(Cancelled) from the leaving robot's served or_join, not "
-    "MemberLost: mover/_rpc.py RpcServer._serve answers 'Cancelled' when its task is cancelled, "
-    "and the closing node (mover/_node.py Node.close) or asyncio.run's shutdown cancels it",
-)
 @pytest.mark.asyncio(loop_scope="module")
 async def test_a_robot_interrupted_mid_run_fails_the_run_with_member_lost(
     interrupted_run: dict[str, Any],
@@ -179,11 +173,6 @@ async def test_a_robot_interrupted_mid_run_fails_the_run_with_member_lost(
         assert "MemberLost" in end.get("error", ""), interrupted_run["outcomes"]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="SIGTERM is not handled: the process dies by the signal (status -15) without a "
-    "word; mover/_cli.py main() turns only KeyboardInterrupt into status 130",
-)
 async def test_sigterm_of_a_robot_is_a_clean_stop(tmp_path: Path) -> None:
     async with cluster() as c, c.launcher() as node:
         log = tmp_path / "r1.log"
