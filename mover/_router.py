@@ -78,7 +78,15 @@ def run(args: argparse.Namespace) -> int:
             members = [check_name("member", m) for m in args.members.split(",") if m]
         except ValueError as exc:
             raise UsageError(str(exc)) from None
-        written = generate_config(Path(args.gen_config), args.team, members, args.host, args.port)
+        if not 1 <= args.port <= 65535:
+            raise UsageError(f"--port must be from 1 to 65535, got {args.port}")
+        target = Path(args.gen_config)
+        if target.exists() and not target.is_dir():
+            raise UsageError(f"--gen-config {target}: exists and is not a directory")
+        try:
+            written = generate_config(target, args.team, members, args.host, args.port)
+        except OSError as exc:
+            raise UsageError(f"--gen-config {target}: {exc.strerror or exc}") from None
         for path in written:
             print(path)
         return 0

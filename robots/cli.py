@@ -101,7 +101,9 @@ def register_robot(sub: Any) -> None:
 
 def _member(path: str, name: str) -> dict[str, Any]:
     try:
-        data = tomllib.loads(Path(path).read_text())
+        data = tomllib.loads(Path(path).read_bytes().decode("utf-8"))
+    except UnicodeDecodeError:
+        raise UsageError(f"team file {path}: not UTF-8") from None
     except (OSError, tomllib.TOMLDecodeError) as exc:
         raise UsageError(f"team file {path}: {exc}") from None
     robots = data.get("robots", [])

@@ -84,6 +84,8 @@ def settings(args: argparse.Namespace) -> MazeSettings:
         raise UsageError("--runs, --agents and --exchanges must be positive")
     if not 4 <= args.size <= 1000:
         raise UsageError(f"--size must be from 4 to 1000, got {args.size}")
+    if not all(0.0 <= p <= 1.0 for p in args.p):  # NaN too
+        raise UsageError(f"--p must be probabilities in [0, 1], got {args.p}")
     maze = None
     if args.maze is not None:
         try:

@@ -12,6 +12,7 @@ Every problem raises :class:`WorldFileError` naming the file, the field and what
 
 from __future__ import annotations
 
+import argparse
 import json
 import math
 import tomllib
@@ -21,6 +22,8 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 import numpy as np
+
+from mover.cli import member_name
 
 from ._generate import double_corridor, random_obstacles
 from ._spec import (
@@ -382,6 +385,10 @@ def parse_world(data: Any, source: str) -> WorldSpec:
     robots: dict[str, RobotSpec] = dict(spec.robots)
     for t in top.tables("robots"):
         rid = t.string("id")
+        try:
+            member_name(rid)  # a robot's id is its process's name in the team
+        except argparse.ArgumentTypeError as exc:
+            raise t.fail("id", str(exc)) from None
         if rid in robots:
             raise t.fail("id", f"robot {rid!r} appears twice")
         robots[rid] = _robot(t, base)
@@ -476,7 +483,9 @@ def load_world(path: str | Path) -> WorldSpec:
             raise WorldFileError(source, "", "not valid TOML: nested too deeply") from None
     elif path.suffix == ".json":
         try:
-            data = json.loads(raw)
+            data = json.loads(raw.decode("utf-8"))
+        except UnicodeDecodeError as exc:
+            raise WorldFileError(source, "", f"not UTF-8: {exc}") from None
         except json.JSONDecodeError as exc:
             raise WorldFileError(
                 source, f"line {exc.lineno}", f"not valid JSON: {exc.msg} (column {exc.colno})"

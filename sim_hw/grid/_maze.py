@@ -191,9 +191,11 @@ def load_maze(path: str | Path) -> Maze:
     """Read a maze JSON file; raise :class:`MazeFileError` naming the file and the fault."""
     p = Path(path)
     try:
-        data = json.loads(p.read_text())
+        data = json.loads(p.read_bytes().decode("utf-8"))
     except OSError as exc:
         raise MazeFileError(f"{p}: cannot read: {exc.strerror or exc}") from exc
+    except UnicodeDecodeError as exc:
+        raise MazeFileError(f"{p}: not UTF-8: {exc}") from None
     except json.JSONDecodeError as exc:
         raise MazeFileError(f"{p}: not JSON: {exc}") from exc
     if not isinstance(data, dict) or "grid" not in data:

@@ -103,9 +103,6 @@ CASES = [
     case(
         ["world", "{badid.toml}"],
         "bad name/*",
-        fails="a robot id in a world file is not checked as a name: "
-        "sim_hw/continuous/_worldfile.py:384 (t.string('id')); the world serves it",
-        bound=HANGS,
     ),
     # options: unknown, malformed, negative, NaN, infinite, huge
     case(["call", "r1", "add", "--bogus-option"], "unrecognized arguments: --bogus-option"),
@@ -140,8 +137,6 @@ CASES = [
     case(
         ["experiment", "maze", "--p", "nan"],
         "--p",
-        fails="--p is not checked where it is read: ValueError traceback from "
-        "sim_hw/grid/_maze.py:66 (generate_maze) via experiments/maze/_trial.py:197",
     ),
     case(
         ["ps", "--wait", "inf"],
@@ -163,8 +158,6 @@ CASES = [
             "99999",
         ],
         "--port",
-        fails="--port is not checked (mover/_router.py:63, type=int): configs for port "
-        "99999 are written and the status is 0",
     ),
     # files: missing, a directory, not UTF-8, the wrong shape, endless
     case(["world", "/nonexistent.toml"], "cannot read"),
@@ -173,8 +166,6 @@ CASES = [
     case(
         ["world", "{latin1.json}"],
         "UTF-8",
-        fails="a world JSON file that is not UTF-8: UnicodeDecodeError traceback from "
-        "sim_hw/continuous/_worldfile.py:479 (load_world)",
     ),
     case(["gridworld", "/nonexistent.txt"], "No such file"),
     case(["gridworld", "{adir}"], "Is a directory"),
@@ -188,8 +179,6 @@ CASES = [
     case(
         ["router", "--gen-config", "{existing}", "--team", "t", "--members", "a"],
         "{existing}",
-        fails="--gen-config onto a file: FileExistsError traceback from "
-        "mover/_router.py:118 (generate_config: directory.mkdir)",
     ),
     case(["robot", "--name", "r9", "--team-file", "/nonexistent.toml"], "No such file"),
     case(["robot", "--name", "r9", "--team-file", "{adir}"], "Is a directory"),
@@ -197,14 +186,10 @@ CASES = [
     case(
         ["robot", "--name", "r9", "--team-file", "{latin1.toml}"],
         "team file",
-        fails="a team file that is not UTF-8: UnicodeDecodeError traceback from "
-        "robots/cli.py:102 (_member catches OSError and TOMLDecodeError only)",
     ),
     case(
         ["experiment", "maze", "--maze", "{latin1.json}"],
         "UTF-8",
-        fails="a maze file that is not UTF-8: UnicodeDecodeError traceback from "
-        "sim_hw/grid/_maze.py:194 (load_maze) via experiments/maze/_cli.py:90",
     ),
     case(["keygen", "--team", "t", "--out", "{adir}"], "Is a directory"),
     case(["replay", "/nonexistent"], "no such file"),
