@@ -34,25 +34,31 @@ STATE_TOPIC = "world/state"
 """The team-wide topic on which a world process streams its snapshots."""
 
 
+MAX_COUNT = 100_000
+"""The most a count read from a command line may be (robots expected, rounds between snapshots)."""
+MAX_RATE = 1000.0
+"""The most a rate read from a command line may be (per simulated second)."""
+
+
 def count(text: str) -> int:
-    """An argparse type: a whole number, zero or more."""
+    """An argparse type: a whole number from 0 to MAX_COUNT."""
     try:
         value = int(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"must be >= 0, got {text}")
+    if not 0 <= value <= MAX_COUNT:
+        raise argparse.ArgumentTypeError(f"must be from 0 to {MAX_COUNT}, got {text}")
     return value
 
 
 def rate(text: str) -> float:
-    """An argparse type: a number, zero or more."""
+    """An argparse type: a number from 0 to MAX_RATE."""
     try:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not value >= 0 or value == float("inf"):
-        raise argparse.ArgumentTypeError(f"must be a finite number >= 0, got {text}")
+    if not 0 <= value <= MAX_RATE:  # NaN too
+        raise argparse.ArgumentTypeError(f"must be a number from 0 to {MAX_RATE:g}, got {text}")
     return value
 
 

@@ -114,6 +114,10 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.set_defaults(func=run)
 
 
+MAX_AGENTS = 10_000
+MAX_SIZE = 1000
+
+
 def settings(args: argparse.Namespace) -> ForagingSettings:
     """The settings the command line asks for, checked; raises
     :class:`~mover.cli.UsageError` naming what is wrong."""
@@ -123,6 +127,8 @@ def settings(args: argparse.Namespace) -> ForagingSettings:
         raise UsageError("--min-runs must be positive and at most --max-runs")
     if min(args.agents or [1]) < 1 or min(args.sizes or [5]) < 5:
         raise UsageError("--agents must be positive and --sizes at least 5 (20 resources)")
+    if max(args.agents or [1]) > MAX_AGENTS or max(args.sizes or [5]) > MAX_SIZE:
+        raise UsageError(f"--agents must be at most {MAX_AGENTS} and --sizes at most {MAX_SIZE}")
     if args.max_iterations < 1:
         raise UsageError("--max-iterations must be positive")
     if args.agent_seeds < 1:

@@ -107,8 +107,12 @@ def settings(args: argparse.Namespace) -> LevySettings:
     :class:`~mover.cli.UsageError` naming what is wrong."""
     if args.runs < 1 or args.workers < 1:
         raise UsageError("--runs and --workers must be positive")
+    if args.runs > 100_000 or args.workers > 64:
+        raise UsageError("--runs must be at most 100000 and --workers at most 64")
     if min(args.targets) < 1 or min(args.robots) < 1:
         raise UsageError("--targets and --robots must be positive")
+    if max(args.targets) > 1000 or max(args.robots) > 1000:
+        raise UsageError("--targets and --robots must be at most 1000")
     if not all(0 < a <= 2 for a in [*args.alphas, args.alpha]):
         raise UsageError("--alpha and --alphas must be in (0, 2]")
     numbers = (args.max_time, args.scale, args.fixed, args.rho0, args.signature_range)

@@ -28,7 +28,7 @@ from typing import Any
 
 from mover import NameTaken
 from mover.cli import UsageError, json_object
-from sim_hw._process import add_world_arguments
+from sim_hw._process import add_world_arguments, count
 
 log = logging.getLogger("sim_hw.grid.cli")
 
@@ -61,7 +61,7 @@ def register(sub: Any) -> None:
     p.add_argument("--snapshots", metavar="DIR", help="write text snapshots to DIR")
     p.add_argument(
         "--snapshot-every",
-        type=int,
+        type=count,
         default=0,
         metavar="N",
         help="a snapshot every N rounds (with --snapshots; 0: only at the end)",
