@@ -144,7 +144,7 @@ class RoundClock(Protocol):
         ...
 
     async def passed(self, t: float) -> None:
-        """Return once this robot has handed in an action for a round after round ``t``;
+        """Return once this robot has handed in an action in round ``t`` or a later one;
         HardwareLost if the hardware goes away meanwhile (see ``robots.hal.Clock.passed``)."""
         ...
 

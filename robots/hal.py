@@ -254,8 +254,9 @@ class Clock(Protocol):
         ...
 
     async def passed(self, t: float) -> None:
-        """Return once this robot has handed in a command for a tick whose time is after ``t``
-        (at once if it has); raise HardwareLost if the hardware goes away meanwhile."""
+        """Return once this robot has gone on past time ``t``: handed in a command on readings
+        of time ``t`` or later (at once if it has); raise HardwareLost if the hardware goes away
+        meanwhile. A robot whose program stopped at ``t`` hands in nothing there."""
         ...
 
 

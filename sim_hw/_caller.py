@@ -329,7 +329,7 @@ class Ticks:
         self._task: asyncio.Task[None] | None = None
         self._waiting = 0  # callers awaiting the exchange under way
         self._idle = False
-        self._handed = -math.inf  # time of the last tick a command was handed in for
+        self._handed = -math.inf  # time of the readings the last command was handed in on
         self._lost: HardwareLost | None = None
         self._changed = asyncio.Event()
 
@@ -383,8 +383,9 @@ class Ticks:
         self._pulse()
 
     async def passed(self, t: float) -> None:
-        """Return once a command was handed in at a tick whose time is after ``t``."""
-        while not self._handed > t:
+        """Return once a command was handed in with readings of time ``t`` or later: this
+        robot went on past ``t`` (a robot whose program stopped at ``t`` hands in nothing)."""
+        while not self._handed >= t:
             if self._lost is not None:
                 raise self._lost
             await self._wait_change()

@@ -36,11 +36,11 @@ async def test_release_idles_and_engage_returns_once_the_world_waits_for_us() ->
     assert clock.now() == pytest.approx(0.5)  # the readings kept coming
     await asyncio.gather(clock.engage(), clock.engage())  # two runs start together
     assert server.idle_robots == frozenset()
-    passed = asyncio.ensure_future(clock.passed(0.5))
+    passed = asyncio.ensure_future(clock.passed(0.6))
     await asyncio.gather(a.clock.tick(), b.clock.tick())  # type: ignore[attr-defined]
-    assert not passed.done()  # a command at t = 0.5 is not after 0.5
+    assert not passed.done()  # a command on the readings of t = 0.5 is not past 0.6
     await asyncio.gather(a.clock.tick(), b.clock.tick())  # type: ignore[attr-defined]
-    await asyncio.wait_for(passed, 1)
+    await asyncio.wait_for(passed, 1)  # one on those of t = 0.6 is
     clock.release()
     await _idle_is(server, ["a"])
     await clock.aclose()

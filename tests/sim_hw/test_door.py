@@ -176,6 +176,7 @@ async def test_passed_returns_once_a_command_went_in_after_the_time() -> None:
     assert not waiting.done()
     await a.clock.tick()  # at t = 0.3
     await asyncio.wait_for(waiting, 1)
+    await a.clock.passed(0.3)  # it went on past 0.3 (a command handed in then): at once
     await a.clock.passed(0.0)  # already: at once
     lost = asyncio.ensure_future(a.clock.passed(math.inf))
     await asyncio.sleep(0.01)
