@@ -7,6 +7,7 @@ missing ones (:func:`run_pool`), so that trials can be added to a point across s
 
 from __future__ import annotations
 
+import argparse
 import json
 import logging
 import multiprocessing
@@ -20,6 +21,21 @@ Record = dict[str, Any]
 Job = TypeVar("Job")
 
 log = logging.getLogger(__name__)
+
+
+def add_saved_arguments(parser: argparse.ArgumentParser, default_save: str) -> None:
+    """``--workers``, ``--save DIR``, ``--no-save``, ``--json`` and ``--quiet``: the options of
+    a runner whose runs are saved per point."""
+    parser.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
+    parser.add_argument(
+        "--save",
+        type=Path,
+        default=Path(default_save),
+        help=f"per-point JSON-lines directory, read back and added to (default {default_save})",
+    )
+    parser.add_argument("--no-save", action="store_true", help="keep no per-point files")
+    parser.add_argument("--json", action="store_true", help="end with one JSON line of every run")
+    parser.add_argument("--quiet", action="store_true", help="no progress line")
 
 
 def load_runs(path: Path | None, seed: int) -> dict[int, Record]:

@@ -7,12 +7,12 @@ import json
 import math
 import secrets
 import time
-from pathlib import Path
 
 from mover.cli import UsageError
 
 from .._common import comma_list, runner_parser
 from .._figures import add_figure_arguments
+from .._saved import add_saved_arguments
 from . import _report
 from ._sweep import FIGURES, EyebotSettings, points, run_points
 
@@ -44,17 +44,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser.add_argument(
         "--duration", type=float, default=3000.0, help="simulated seconds a run (default 3000)"
     )
-    parser.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
-    parser.add_argument(
-        "--save",
-        type=Path,
-        default=Path("results/eyebot/runs"),
-        help="per-point JSON-lines directory, read back and added to (default results/eyebot/runs)",
-    )
-    parser.add_argument("--no-save", action="store_true", help="keep no per-point files")
+    add_saved_arguments(parser, "results/eyebot/runs")
     add_figure_arguments(parser)
-    parser.add_argument("--json", action="store_true", help="end with one JSON line of every run")
-    parser.add_argument("--quiet", action="store_true", help="no progress line")
     parser.set_defaults(func=run)
 
 

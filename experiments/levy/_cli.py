@@ -8,13 +8,13 @@ import math
 import secrets
 import time
 from dataclasses import replace
-from pathlib import Path
 
 from mover.cli import UsageError
 from robots.library import METHODS, LevyParams
 
 from .._common import comma_list, runner_parser
 from .._figures import add_figure_arguments
+from .._saved import add_saved_arguments
 from ._paper import ALPHA_TARGETS, ALPHAS, FIG8_TARGETS, FIG9_ROBOTS, Setup
 from ._report import paired, saturation, speed, table, theory
 from ._settings import LevySettings
@@ -86,19 +86,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         action="store_true",
         help="L+P: a robot is repelled by the targets it marked itself too (the paper: others)",
     )
-    parser.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
-    parser.add_argument(
-        "--save",
-        type=Path,
-        default=Path("results/levy/runs"),
-        help="per-point JSON-lines directory, read back and added to (default results/levy/runs)",
-    )
-    parser.add_argument("--no-save", action="store_true", help="keep no per-point files")
+    add_saved_arguments(parser, "results/levy/runs")
     add_figure_arguments(parser)
-    parser.add_argument(
-        "--json", action="store_true", help="end with one JSON line holding every run"
-    )
-    parser.add_argument("--quiet", action="store_true", help="no progress line")
     parser.set_defaults(func=run)
 
 
