@@ -4,8 +4,11 @@ Every process gets its own session (process group), so a terminal's Ctrl-C reach
 ``mover up``, which then stops the team in order: SIGINT to every member's group (their clean
 exit), SIGTERM after ``STOP_GRACE`` seconds, SIGKILL after ``KILL_GRACE`` more; the router last.
 No orphan is left if ``mover up`` itself is killed: each child is started through a few lines
-of Python that ask Linux for SIGTERM when their parent dies (``PR_SET_PDEATHSIG``, kept across
-``exec``) and exit if the parent is already gone; elsewhere this guard is skipped.
+of Python that ask Linux for SIGKILL when their parent dies (``PR_SET_PDEATHSIG``, kept across
+``exec``) and exit if the parent is already gone; elsewhere this guard is skipped. SIGKILL, not
+SIGTERM: with nobody left to wait for them, a clean exit that hangs would be an orphan (an
+orderly stop is ``mover up``'s own, above). The guard runs in the child after ``exec``, not as a
+``preexec_fn``, which would run Python in a fork of a process with zenoh's threads.
 
 Each process's standard output and error go through one pipe to its log file in the run folder
 (``<name>.log``) and, prefixed with ``[name]``, to this process's standard output. Readiness is
@@ -50,10 +53,10 @@ LAST_LINES = 20
 MAX_LINE = 2**20
 """The longest output line read from a process (a longer one is cut)."""
 
-# Run before exec: SIGTERM when the parent dies (Linux), and no start if it already has.
+# Run before exec: SIGKILL when the parent dies (Linux), and no start if it already has.
 _GUARD = (
     "import ctypes,os,sys\n"
-    "try: ctypes.CDLL(None).prctl(1, 15)\n"  # PR_SET_PDEATHSIG, SIGTERM
+    "try: ctypes.CDLL(None).prctl(1, 9)\n"  # PR_SET_PDEATHSIG, SIGKILL
     "except (OSError, AttributeError): pass\n"
     "if os.getppid() != int(sys.argv[1]): sys.exit(70)\n"
     "os.execv(sys.argv[2], sys.argv[2:])\n"

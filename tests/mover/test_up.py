@@ -196,7 +196,7 @@ async def test_a_large_team_runs_behind_a_router_and_leaves_no_orphan_when_kille
     finally:
         if up.proc.returncode is None:
             up.proc.kill()
-    assert await gone(pids, 5.0) == [], up.text
+    assert await gone(pids, 10.0) == [], up.text
 
 
 async def test_the_foraging_team_file_runs_once_and_stops(tmp_path: Path) -> None:
