@@ -114,8 +114,9 @@ class RunClock(Protocol):
         ...
 
     async def passed(self, t: float) -> None:
-        """Return once this robot has handed in a command for a tick whose time is after ``t``
-        (at once if it already has)."""
+        """Return once this robot has gone on past time ``t``: handed in a command on readings
+        of time ``t`` or later (at once if it has). A robot whose program stopped at ``t``
+        hands in nothing there."""
         ...
 
     async def engage(self) -> None:
@@ -226,6 +227,10 @@ class _LocalOp:
             lost = waiter.done() and not waiter.cancelled() and waiter.exception() is not None
             if lost and self.finished_at is None:
                 return {"out": True}  # the hardware went away: this run will not claim
+            for _ in range(3):  # an operation the same readings ended returns first
+                if self.finished_at is not None or self.op.done():
+                    break
+                await asyncio.sleep(0)
         if self.finished_at is not None:
             return {"finished": self.finished_at}
         if self.op.done():

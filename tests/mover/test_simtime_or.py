@@ -54,7 +54,7 @@ class FakeClock:
     def __init__(self, world: FakeWorld, name: str) -> None:
         self.world, self.name = world, name
         self._now = world.time
-        self.handed_at = -math.inf  # the time of the last tick it handed in a command for
+        self.handed_at = -math.inf  # the time of the readings it last handed a command in on
 
     def now(self) -> float:
         return self._now
@@ -72,7 +72,7 @@ class FakeClock:
         self._now = w.time
 
     async def passed(self, t: float) -> None:
-        while not self.handed_at > t:
+        while not self.handed_at >= t:  # it went on from readings of t (robots.hal.Clock)
             await self.world.wait()
 
     async def engage(self) -> None:
