@@ -119,6 +119,17 @@ class RunClock(Protocol):
         hands in nothing there."""
         ...
 
+    def hold(self, t: float | None) -> None:
+        """Hand in no command on readings later than ``t`` until ``hold(None)`` (a tick waits
+        meanwhile): a ``distributed_or`` holds a member that went past the earliest finish until
+        the step is decided, so that it stops on the same tick whatever the wall clock does."""
+        ...
+
+    def waiting(self) -> contextlib.AbstractAsyncContextManager[None]:
+        """Idle for the block (the world neither waits for this robot nor moves it), engaged
+        again on the way out: a ``distributed_and`` waits so for the other members."""
+        ...
+
     async def engage(self) -> None:
         """Stop idling: on return the world waits for this robot's commands."""
         ...
@@ -235,6 +246,7 @@ class _LocalOp:
             return {"finished": self.finished_at}
         if self.op.done():
             return {"out": True}  # failed or cancelled: it will never claim
+        self.clock.hold(t)  # no further until decided: where a loser stops is then fixed
         return {"passed": self.clock.now()}
 
 
@@ -724,6 +736,8 @@ class TaskTeam:
         finally:
             if not op.done():
                 op.cancel()
+            if local is not None:
+                local.clock.hold(None)  # after the cancel: the operation hands in nothing more
             await asyncio.gather(op, return_exceptions=True)  # the losers' cleanup runs here
         metrics.continued = time.perf_counter()
         self._raise_lost(metrics, decision)
@@ -821,12 +835,19 @@ class TaskTeam:
             result = OperationFailed(type(exc).__name__, str(exc))
         metrics.finished = time.perf_counter()
         wire = ["__failed__", result.type, result.message] if error else result
-        if designated:
-            decision = await self._and_designated(metrics, wire)
-        else:
-            decision = await self._and_all(metrics, wire)
+        timed = self.clock is not None and self.simulated
+        # In simulated time a member that finished is idle while it waits, so that the world
+        # neither waits for it nor moves on because of it: when the last one finishes, the
+        # world holds still until all have been told.
+        async with self.clock.waiting() if timed and self.clock else contextlib.nullcontext():
+            if designated:
+                decision = await self._and_designated(metrics, wire)
+            else:
+                decision = await self._and_all(metrics, wire)
         metrics.continued = time.perf_counter()
         self._raise_lost(metrics, decision)
+        if timed:
+            await self._rejoin()
         if error is not None:
             raise error
         results = {m: _unwire(r) for m, r in decision.results.items()}
@@ -878,6 +899,15 @@ class TaskTeam:
             await asyncio.gather(*senders, return_exceptions=True)
 
     # -- helpers ------------------------------------------------------------------------------
+
+    async def _rejoin(self) -> None:
+        """After a ``distributed_and`` in simulated time: every member is engaged again before
+        any goes on (step kind ``"rejoin"``), so that none misses a tick it would have acted
+        in; nobody ticks meanwhile, so the world holds still. 2(n-1) messages."""
+        metrics = self._begin("rejoin")
+        decision = await self._and_designated(metrics, None)
+        metrics.continued = time.perf_counter()
+        self._raise_lost(metrics, decision)
 
     def _begin(self, kind: str) -> StepMetrics:
         self._step += 1

@@ -34,20 +34,19 @@ async def follow_trainer(
     lines to ``dataset``. Returns the labels and how many snapshots this robot recorded.
     """
     lead = team.me == trainer
-    async with robot.hw.clock.ticking():  # a lock-step world must not wait on an idle robot
-        shared = await team.distributed_and(lambda: _labels(list(places or {}) if lead else []))
-        records = 0
-        for label in shared[trainer]:
-            await team.report("leading" if lead else "following", place=label)
-            if lead:
-                x, y = (places or {})[label]
-                await team.distributed_or(partial(goto_point, robot, (x, y), speed=0.25))
-            else:
-                await team.distributed_or(partial(follow, robot, trainer))
-            if not lead:
-                _record(dataset, label, team.me, snapshot(robot))
-                records += 1
-            await team.distributed_and(_nothing)  # the trainer leads on once all recorded
+    shared = await team.distributed_and(lambda: _labels(list(places or {}) if lead else []))
+    records = 0
+    for label in shared[trainer]:
+        await team.report("leading" if lead else "following", place=label)
+        if lead:
+            x, y = (places or {})[label]
+            await team.distributed_or(partial(goto_point, robot, (x, y), speed=0.25))
+        else:
+            await team.distributed_or(partial(follow, robot, trainer))
+        if not lead:
+            _record(dataset, label, team.me, snapshot(robot))
+            records += 1
+        await team.distributed_and(_nothing)  # the trainer leads on once all recorded
     return {"places": shared[trainer], "records": records}
 
 

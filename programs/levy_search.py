@@ -61,8 +61,7 @@ async def levy_search(
     async def now() -> float:
         return hw.clock.now()
 
-    async with hw.clock.ticking():  # a lock-step world must not wait on an idle robot
-        latest = max((await team.distributed_and(now)).values())
+    latest = max((await team.distributed_and(now)).values())
     start = latest + START_LEAD * hw.clock.tick_period
     while hw.clock.now() < start - 1e-9:
         await hw.clock.tick()
@@ -88,8 +87,7 @@ async def levy_search(
         return len(found) >= targets or hw.clock.now() - start > max_time
 
     mine = await library.levy_search(robot, walk, neighbours, over, marked)
-    async with hw.clock.ticking():
-        await team.distributed_and(now)  # everyone stops before anyone leaves the world
+    await team.distributed_and(now)  # everyone stops before anyone leaves the world
     here.close()
     heard.close()
     times = sorted(found.values())

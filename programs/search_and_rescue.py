@@ -43,25 +43,24 @@ async def search_and_rescue(
     Returns the winner, the object's estimated start and how far this robot saw it move.
     """
     rng = team.rng("search") if seed is None else random.Random(f"{seed}/{team.me}")
-    async with robot.hw.clock.ticking():  # a lock-step world must not wait on an idle robot
-        await team.report("searching")
-        won = await team.distributed_or(lambda: search(robot, recognition(recognise), rng=rng))
-        found = Found.load(won.result)
-        plan = Path.relative(found.location, path or [[3.0, 0.0]])
-        role, lateral = stations(won.winner, team.members, width)[team.me]
-        await team.report("found", winner=won.winner, object=found.object_id)
-        await team.report("gathering", role=role)
-        await team.distributed_and(
-            lambda: goto_object(
-                robot, found.location, plan.heading(), lateral, object_id=found.object_id
-            )
+    await team.report("searching")
+    won = await team.distributed_or(lambda: search(robot, recognition(recognise), rng=rng))
+    found = Found.load(won.result)
+    plan = Path.relative(found.location, path or [[3.0, 0.0]])
+    role, lateral = stations(won.winner, team.members, width)[team.me]
+    await team.report("found", winner=won.winner, object=found.object_id)
+    await team.report("gathering", role=role)
+    await team.distributed_and(
+        lambda: goto_object(
+            robot, found.location, plan.heading(), lateral, object_id=found.object_id
         )
-        await team.report("pushing", role=role)
-        moved = await (
-            pusher(robot, plan, object_id=found.object_id)
-            if role == "pusher"
-            else steerer(robot, plan, lateral, object_id=found.object_id)
-        )
+    )
+    await team.report("pushing", role=role)
+    moved = await (
+        pusher(robot, plan, object_id=found.object_id)
+        if role == "pusher"
+        else steerer(robot, plan, lateral, object_id=found.object_id)
+    )
     return {
         "winner": won.winner,
         "object": found.object_id,

@@ -143,6 +143,10 @@ class RoundClock(Protocol):
         actions nor holds a round for it (see ``robots.hal.Clock.idling``)."""
         ...
 
+    def hold(self, t: float | None) -> None:
+        """Hand in no action after round ``t`` until ``hold(None)`` (``robots.hal.Clock.hold``)."""
+        ...
+
     async def passed(self, t: float) -> None:
         """Return once this robot has handed in an action in round ``t`` or a later one;
         HardwareLost if the hardware goes away meanwhile (see ``robots.hal.Clock.passed``)."""

@@ -253,6 +253,11 @@ class Clock(Protocol):
         """
         ...
 
+    def hold(self, t: float | None) -> None:
+        """Hand in no command on readings later than ``t`` until ``hold(None)``: a tick waits
+        meanwhile (a collective in simulated time holds a robot until it is decided)."""
+        ...
+
     async def passed(self, t: float) -> None:
         """Return once this robot has gone on past time ``t``: handed in a command on readings
         of time ``t`` or later (at once if it has); raise HardwareLost if the hardware goes away

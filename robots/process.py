@@ -22,7 +22,7 @@ import asyncio
 import contextlib
 import logging
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import AsyncIterator, Callable, Mapping
 from importlib.metadata import EntryPoint, entry_points
 from typing import Any
 
@@ -191,6 +191,7 @@ class HostClock:
         self._lost = lost
         self._task: asyncio.Task[None] | None = None
         self._stop = asyncio.Event()
+        self._waits = 0
         self._sentinel = asyncio.get_running_loop().create_task(self._watch())
 
     def now(self) -> float:
@@ -200,6 +201,23 @@ class HostClock:
     async def passed(self, t: float) -> None:
         """Return once this robot handed in a command for a tick after time ``t``."""
         await self._hw.clock.passed(t)
+
+    def hold(self, t: float | None) -> None:
+        """Hand in no command on readings later than ``t`` until ``hold(None)``."""
+        self._hw.clock.hold(t)
+
+    @contextlib.asynccontextmanager
+    async def waiting(self) -> AsyncIterator[None]:
+        """Idle for the block (a collective waiting for the others), engaged again after."""
+        self._waits += 1
+        if self._waits == 1:
+            self.release()
+        try:
+            yield
+        finally:
+            self._waits -= 1
+            if self._waits == 0:
+                await self.engage()
 
     async def engage(self) -> None:
         """Stop idling; on return the world waits for this robot's commands."""

@@ -330,6 +330,7 @@ class Ticks:
         self._waiting = 0  # callers awaiting the exchange under way
         self._idle = False
         self._handed = -math.inf  # time of the readings the last command was handed in on
+        self._hold: float | None = None  # no command on readings later than this (hold)
         self._lost: HardwareLost | None = None
         self._changed = asyncio.Event()
 
@@ -349,6 +350,9 @@ class Ticks:
         task = self._task
         if task is not None and not task.done() and self._waiting == 0:
             await self._finish(task)  # left by a cancelled caller: it goes first
+            task = self._task
+        while self._hold is not None and self.now() > self._hold and (task is None or task.done()):
+            await self._wait_change()  # held (see hold): until released
             task = self._task
         if task is None or task.done():
             task = self._task = asyncio.get_running_loop().create_task(self._exchange(make))
@@ -380,6 +384,14 @@ class Ticks:
         if self._after is not None:
             self._after(command, readings)
         self.readings = readings
+        self._pulse()
+
+    def hold(self, t: float | None) -> None:
+        """Hand in no command on readings later than ``t`` until ``hold(None)``: a tick waits
+        (and may be cancelled there, having handed in nothing). A ``distributed_or`` in
+        simulated time holds a member that is past the earliest finish until the decision, so
+        that a loser stops on the same tick whatever the wall clock does."""
+        self._hold = t
         self._pulse()
 
     async def passed(self, t: float) -> None:

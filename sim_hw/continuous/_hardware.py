@@ -96,6 +96,10 @@ class SimHardware:
         """Be idle for the block: the drive stopped, a lock-step world not waiting for us."""
         return self._ticks.idling(self._stopped)
 
+    def hold(self, t: float | None) -> None:
+        """Hand in nothing on readings later than ``t`` until ``hold(None)`` (see ``Ticks``)."""
+        self._ticks.hold(t)
+
     async def passed(self, t: float) -> None:
         """Return once a command was handed in at a tick after simulated time ``t``."""
         await self._ticks.passed(t)
@@ -228,7 +232,7 @@ class _Clock:
 
     def __init__(self, hw: SimHardware) -> None:
         self.now, self.tick, self.sleep, self.ticking = hw.now, hw.tick, hw.sleep, hw.ticking
-        self.idling, self.passed = hw.idling, hw.passed
+        self.idling, self.passed, self.hold = hw.idling, hw.passed, hw.hold
 
 
 class _Drive:

@@ -124,6 +124,10 @@ class GridRobot:
         self._action.pop("move", None)
         return {}
 
+    def hold(self, t: float | None) -> None:
+        """Hand in nothing on readings later than ``t`` until ``hold(None)`` (see ``Ticks``)."""
+        self._ticks.hold(t)
+
     async def passed(self, t: float) -> None:
         """Return once an action was handed in for a round after round ``t``."""
         await self._ticks.passed(t)

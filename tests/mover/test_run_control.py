@@ -6,10 +6,12 @@ warns when the team it finds changed, and the run's seed gives every member the 
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import os
 import random
 import sys
 import time
+from collections.abc import AsyncIterator
 from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
@@ -243,6 +245,13 @@ class CountingClock:
 
     async def passed(self, t: float) -> None:
         return None
+
+    def hold(self, t: float | None) -> None:
+        self.held = t
+
+    @contextlib.asynccontextmanager
+    async def waiting(self) -> AsyncIterator[None]:
+        yield
 
     async def engage(self) -> None:
         self.calls.append("engage")

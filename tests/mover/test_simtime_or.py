@@ -4,6 +4,7 @@ lock-step world whose ticks advance only when every engaged member has handed in
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import math
 import random
 import time
@@ -74,6 +75,13 @@ class FakeClock:
     async def passed(self, t: float) -> None:
         while not self.handed_at >= t:  # it went on from readings of t (robots.hal.Clock)
             await self.world.wait()
+
+    def hold(self, t: float | None) -> None:
+        self.held = t
+
+    @contextlib.asynccontextmanager
+    async def waiting(self) -> AsyncIterator[None]:
+        yield
 
     async def engage(self) -> None:
         self.world.engaged.add(self.name)
