@@ -1,12 +1,10 @@
-"""The `mover ps`, `mover call`, `mover keygen`, `mover run`, `mover runs` and `mover cancel`
-verbs.
+"""The `mover ps`, `mover call`, `mover echo` and `mover keygen` verbs (`mover run`, `runs`
+and `cancel` are in ``mover._cli_runs``).
 
 Team and transport come from ``--team`` and the MOVER_* environment (see ``mover._config``);
 ``--connect`` adds endpoints to reach the team. Both are :func:`mover.cli.add_team_arguments`'.
-What runs where comes from each member's ``mover.status`` (one call per member, bounded by
-``STATUS_TIMEOUT``). ``mover run`` remembers the members it found per team name in
-``teams.json`` under the state folder (``$MOVER_STATE_DIR``, else ``$XDG_STATE_HOME/mover``,
-else ``~/.local/state/mover``) and warns when the next run finds others.
+``mover ps`` shows each member's run and phase from its ``mover.status`` (one call per member,
+bounded by ``STATUS_TIMEOUT``).
 """
 
 from __future__ import annotations
@@ -15,11 +13,10 @@ import argparse
 import asyncio
 import json
 import logging
-import os
+import math
 import secrets
 import sys
 import time
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ._config import NodeConfig, Team
@@ -30,7 +27,6 @@ from .cli import (
     add_team_arguments,
     json_argument,
     json_object,
-    member_name,
     positive,
     team_from_args,
 )
@@ -42,23 +38,29 @@ if TYPE_CHECKING:
 
 log = logging.getLogger("mover.cli")
 
+MAX_WAIT = 3600.0  # seconds a verb may be asked to wait for the team
+ECHO_QUEUE = 1000  # messages mover echo keeps unread at most
 STATUS_TIMEOUT = 3.0  # seconds a member has to answer mover.status
 NO_ANSWER = "(no answer)"
 NO_PROGRAMS = "-"  # a member that hosts no programs (a world, a tool)
-STATE_ENV = "MOVER_STATE_DIR"
-_TEAMS_KEPT = 100  # team names teams.json remembers
-_STATE_LIMIT = 1 << 20  # bytes of teams.json read at most
 
 
 def _team_options(p: argparse.ArgumentParser) -> None:
     add_team_arguments(p)
     p.add_argument(
         "--wait",
-        type=float,
+        type=_wait,
         default=2.0,
         metavar="S",
-        help="seconds to wait for the team to be discovered (default 2)",
+        help="seconds to wait for the team to be discovered (default 2, at most 3600)",
     )
+
+
+def _wait(text: str) -> float:
+    value = positive(text)
+    if value > MAX_WAIT:
+        raise argparse.ArgumentTypeError(f"must be at most {MAX_WAIT:g} s, got {text}")
+    return value
 
 
 # -- ps -------------------------------------------------------------------------------------------
@@ -166,8 +168,13 @@ def register_call(sub: Sub) -> None:
         description="Arguments are JSON values: 3, 1.5, '\"text\"', '[1, 2]'.",
     )
     p.add_argument("robot")
-    p.add_argument("procedure")
+    p.add_argument("procedure", nargs="?", help="the procedure (not with --list)")
     p.add_argument("args", nargs="*", metavar="JSON", help="positional arguments, each JSON")
+    p.add_argument(
+        "--list",
+        action="store_true",
+        help="list the robot's exported procedures, their signatures and what they do",
+    )
     p.add_argument("--kwargs", metavar="JSON", help="keyword arguments as a JSON object")
     p.add_argument("--timeout", type=positive, default=10.0, help="seconds (default 10)")
     _team_options(p)
@@ -175,6 +182,12 @@ def register_call(sub: Sub) -> None:
 
 
 def run_call(args: argparse.Namespace) -> int:
+    if args.list:
+        if args.procedure is not None or args.args or args.kwargs:
+            raise UsageError("--list takes no procedure and no arguments")
+        args.procedure = "mover.procedures"
+    elif args.procedure is None:
+        raise UsageError("name a procedure to call (or --list the robot's procedures)")
     try:
         check_name("robot", args.robot)
         check_name("procedure", args.procedure)
@@ -215,6 +228,12 @@ async def _call(
         except (CallError, WireError) as exc:  # WireError: an argument msgpack cannot carry
             print(f"mover call: {type(exc).__name__}: {exc}", file=sys.stderr)
             return 1
+    if args.list and isinstance(result, dict):
+        for name in sorted(result):
+            entry = result[name] if isinstance(result[name], dict) else {}
+            doc = f"  {entry['doc']}" if entry.get("doc") else ""
+            print(f"{name}{entry.get('signature', '(?)')}{doc}")
+        return 0
     print(json.dumps(result, default=_plain))
     return 0
 
@@ -258,388 +277,111 @@ def run_keygen(args: argparse.Namespace) -> int:
     return 0
 
 
-# -- run ------------------------------------------------------------------------------------------
+# -- echo -----------------------------------------------------------------------------------------
 
 
-def _seed(text: str) -> int:
-    """An argparse type: a seed, 0 <= seed < 2**63."""
+def register_echo(sub: Sub) -> None:
+    """Add ``mover echo``."""
+    p = sub.add_parser(
+        "echo",
+        help="print the messages of a broadcast topic, decoded",
+        description="Print each message on TOPIC as it comes: time, sender, distance and bearing"
+        " (from --at), and its data as JSON. Range-limited broadcasts reach an echo only when it"
+        " is given a place (--at) within their range, as they would a robot there.",
+    )
+    p.add_argument("topic", help="the topic, as programs name it (e.g. mover/run/RUN, hello)")
+    p.add_argument(
+        "--at",
+        type=_pose,
+        metavar="X,Y[,HEADING]",
+        help="listen from this place (metres, radians): range-limited messages within range"
+        " reach it, with distance and bearing",
+    )
+    p.add_argument(
+        "--count", type=_count, default=0, help="stop after N messages (default: until Ctrl-C)"
+    )
+    p.add_argument("--json", action="store_true", help="one JSON object per message")
+    _team_options(p)
+    p.set_defaults(func=run_echo)
+
+
+def _pose(text: str) -> tuple[float, float, float]:
+    try:
+        parts = [float(v) for v in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected X,Y[,HEADING], got {text!r}") from None
+    if len(parts) not in (2, 3) or not all(math.isfinite(v) for v in parts):
+        raise argparse.ArgumentTypeError(f"expected X,Y[,HEADING] (finite), got {text!r}")
+    return (parts[0], parts[1], parts[2] if len(parts) == 3 else 0.0)
+
+
+def _count(text: str) -> int:
     try:
         value = int(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
-    if not 0 <= value < 2**63:
-        raise argparse.ArgumentTypeError(f"must be at least 0 and below 2**63, got {text}")
+        raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
+    if not 0 <= value <= 1_000_000:
+        raise argparse.ArgumentTypeError(f"must be from 0 to 1000000, got {text}")
     return value
 
 
-def register_run(sub: Sub) -> None:
-    """Add ``mover run``."""
-    p = sub.add_parser(
-        "run",
-        help="start an installed program on members of a team",
-        description="Starts PROGRAM on every chosen member (no code is sent: "
-        "members run their installed copy), shows progress, and prints each "
-        "member's outcome. The launcher is not a coordinator: with --detach it "
-        "exits once the run has started; --attach RUN follows it again.",
-    )
-    p.add_argument("program", nargs="?")
-    p.add_argument(
-        "--robots",
-        help="comma-separated members (default: every member that is not a tool or a world)",
-    )
-    p.add_argument(
-        "--args", metavar="JSON", default="{}", help="the program's arguments as a JSON object"
-    )
-    p.add_argument("--detach", action="store_true", help="exit once the run has started")
-    p.add_argument("--run-id", type=member_name, help="name of the run (default: PROGRAM-<random>)")
-    p.add_argument(
-        "--seed", type=_seed, help="seed of the run's random choices (default: from the run id)"
-    )
-    p.add_argument(
-        "--share",
-        action="store_true",
-        help="run beside runs under way that were started with --share too",
-    )
-    p.add_argument(
-        "--attach",
-        metavar="RUN",
-        type=member_name,
-        help="follow a run started earlier (progress and outcomes) instead of starting one",
-    )
-    _team_options(p)
-    p.set_defaults(func=run_run)
-
-
-def run_run(args: argparse.Namespace) -> int:
-    if args.attach is not None:
-        if args.program is not None:
-            raise UsageError("give a PROGRAM to start or --attach RUN, not both")
-        team, config = team_from_args(args)
-        return asyncio.run(_attach(team, config, args))
-    if args.program is None:
-        raise UsageError("a PROGRAM to start is needed (or --attach RUN)")
-    kwargs = json_object(args.args, "--args")
-    try:
-        check_name("program", args.program)
-        robots = (
-            [check_name("robot", r) for r in args.robots.split(",") if r] if args.robots else None
-        )
-    except ValueError as exc:
-        raise UsageError(str(exc)) from None
+def run_echo(args: argparse.Namespace) -> int:
+    if not args.topic or len(args.topic) > 200 or any(c in args.topic for c in "*$#?"):
+        raise UsageError(f"not a topic: {args.topic!r} (no wildcards, at most 200 characters)")
     team, config = team_from_args(args)
-    return asyncio.run(_run(team, config, args, robots, kwargs))
+    return asyncio.run(_echo(team, config, args))
 
 
-def _progress(node: Node, run: str) -> asyncio.Task[None]:
-    """Print the progress reports of run ``run`` as they come (a task; cancel it to stop)."""
-    from ._programs import PROGRESS_TOPIC
-
-    progress = node.subscribe(f"{PROGRESS_TOPIC}/{run}")
-    started = time.monotonic()
-
-    async def show() -> None:
-        async for m in progress:
-            if not isinstance(m.data, dict):
-                continue
-            info = {k: v for k, v in m.data.items() if k not in ("member", "phase")}
-            extra = " ".join(f"{k}={_short(v)}" for k, v in info.items())
-            print(
-                f"[{time.monotonic() - started:6.1f}s] {m.data.get('member')}: "
-                f"{m.data.get('phase')} {extra}".rstrip(),
-                flush=True,
-            )
-
-    return asyncio.create_task(show())
-
-
-async def _run(
-    team: Team,
-    config: NodeConfig,
-    args: argparse.Namespace,
-    robots: list[str] | None,
-    kwargs: dict[str, Any],
-) -> int:
-    from ._node import Node
-    from ._programs import launch, outcomes
-
-    run = args.run_id or f"{args.program}-{secrets.token_hex(3)}"
-    async with Node(
-        f"run-{secrets.token_hex(3)}", team, kind="tool", config=config, observer=True
-    ) as node:
-        try:
-            if robots:
-                await node.team.wait_for(robots, timeout=args.wait)
-            else:
-                await asyncio.sleep(args.wait)
-        except TimeoutError:
-            missing = sorted(set(robots or ()) - node.team.members())
-            print(f"mover run: not in team {team.name!r}: {', '.join(missing)}", file=sys.stderr)
-            return 1
-        members = robots or sorted(
-            n
-            for n in node.team.members()
-            if (i := node.team.info(n)) is not None and i.kind not in ("tool", "world")
-        )
-        if not members:
-            print(f"mover run: no members in team {team.name!r}", file=sys.stderr)
-            return 1
-        if robots is None:
-            _check_team(team.name, members)
-        shower = _progress(node, run)
-        try:
-            await launch(
-                node,
-                args.program,
-                members,
-                kwargs,
-                run=run,
-                wait=False,
-                seed=args.seed,
-                share=args.share,
-            )
-            # said once every member has started it: from now on they know the run
-            print(f"run {run}: {args.program} on {', '.join(members)}", flush=True)
-            if not args.detach:
-                ends = await outcomes(node, run, members)
-        except CallError as exc:
-            print(f"mover run: {type(exc).__name__}: {exc}", file=sys.stderr)
-            return 1
-        finally:
-            await asyncio.sleep(0.1)
-            shower.cancel()
-    if args.detach:
-        print(f"run {run} started; the members go on without this launcher")
-        print(f"follow it with: mover run --attach {run}; end it with: mover cancel {run}")
-        return 0
-    return _print_outcomes(ends)
-
-
-def _print_outcomes(outcomes: dict[str, dict[str, Any]]) -> int:
-    failed = 0
-    for member, outcome in outcomes.items():
-        if "error" in outcome:
-            failed += 1
-            print(f"{member}: FAILED {outcome['error']}")
-            if outcome.get("traceback"):  # a bug in the program: where it happened
-                print("  " + str(outcome["traceback"]).rstrip().replace("\n", "\n  "))
-        else:
-            print(f"{member}: {json.dumps(outcome.get('result'), default=_plain)}")
-    return 1 if failed else 0
-
-
-async def _find_run(
-    node: Node, run: str, wait: float
-) -> tuple[dict[str, dict[str, Any]], dict[str, list[dict[str, Any]] | str]]:
-    """Who knows run ``run``: {member: its status of the run}, and every member's statuses."""
-    await asyncio.sleep(wait)
-    names = sorted(n for n in node.team.members() if (i := node.team.info(n)) and i.kind != "tool")
-    statuses = await _statuses(node, names)
-    found = {
-        member: entry
-        for member, runs in statuses.items()
-        if isinstance(runs, list)
-        for entry in runs
-        if entry.get("run") == run
-    }
-    return found, statuses
-
-
-async def _attach(team: Team, config: NodeConfig, args: argparse.Namespace) -> int:
-    from ._node import Node
-    from ._programs import outcomes
-
-    run = args.attach
-    async with Node(
-        f"attach-{secrets.token_hex(3)}", team, kind="tool", config=config, observer=True
-    ) as node:
-        shower = _progress(node, run)  # first, so that no report is missed
-        try:
-            found, _ = await _find_run(node, run, args.wait)
-            if not found:
-                print(
-                    f"mover run: no member of team {team.name!r} knows run {run!r}",
-                    file=sys.stderr,
-                )
-                return 1
-            first = next(iter(found.values()))
-            members = [m for m in first.get("members", []) if isinstance(m, str)] or list(found)
-            print(f"run {run}: {first.get('program')} on {', '.join(members)}", flush=True)
-            for member in members:
-                entry = found.get(member)
-                where = f"{entry.get('state')}, {entry.get('phase')}" if entry else NO_ANSWER
-                print(f"  {member}: {where}", flush=True)
-            ends = await outcomes(node, run, members)
-        finally:
-            await asyncio.sleep(0.1)
-            shower.cancel()
-    return _print_outcomes(ends)
-
-
-# -- runs, cancel ---------------------------------------------------------------------------------
-
-
-def register_runs(sub: Sub) -> None:
-    """Add ``mover runs``."""
-    p = sub.add_parser("runs", help="list the runs on the members of a team")
-    _team_options(p)
-    p.add_argument("--json", action="store_true", help="one JSON object per run")
-    p.set_defaults(func=run_runs)
-
-
-def run_runs(args: argparse.Namespace) -> int:
-    team, config = team_from_args(args)
-    return asyncio.run(_runs(team, config, args))
-
-
-async def _runs(team: Team, config: NodeConfig, args: argparse.Namespace) -> int:
+async def _echo(team: Team, config: NodeConfig, args: argparse.Namespace) -> int:
     from ._node import Node
 
+    where = args.at
+    locator = _Fixed(where) if where is not None else None
     async with Node(
-        f"runs-{secrets.token_hex(3)}", team, kind="tool", config=config, observer=True
+        f"echo-{secrets.token_hex(3)}",
+        team,
+        kind="tool",
+        config=config,
+        observer=True,
+        locator=locator,
     ) as node:
-        await asyncio.sleep(args.wait)
-        names = sorted(
-            n for n in node.team.members() if (i := node.team.info(n)) and i.kind != "tool"
-        )
-        statuses = await _statuses(node, names)
-    runs: dict[str, dict[str, Any]] = {}
-    for member, entries in statuses.items():
-        for entry in entries if isinstance(entries, list) else ():
-            row = runs.setdefault(
-                entry["run"],
-                {
-                    "run": entry["run"],
-                    "program": entry.get("program"),
-                    "members": entry.get("members"),
-                    "started": entry.get("started") or 0.0,
-                    "states": {},
-                },
-            )
-            row["states"][member] = f"{entry.get('state')}:{entry.get('phase')}"
-    rows = sorted(runs.values(), key=lambda r: (float(r["started"]), r["run"]))
-    silent = sorted(m for m, s in statuses.items() if s == NO_ANSWER)
-    if args.json:
-        for row in rows:
-            print(json.dumps(row, default=str))
-        return 0
-    if silent:
-        print(f"mover runs: no answer from {', '.join(silent)}", file=sys.stderr)
-    if not rows:
-        print(f"no runs on the members of team {team.name!r}")
-        return 0
-    print(f"{'RUN':<28} {'PROGRAM':<20} {'STARTED':<9} MEMBERS (state:phase)")
-    for row in rows:
-        when = time.strftime("%H:%M:%S", time.localtime(float(row["started"])))
-        states = " ".join(f"{m}={st}" for m, st in sorted(row["states"].items()))
-        print(f"{row['run']:<28} {row['program']!s:<20} {when:<9} {states}")
+        seen = 0
+        async with node.subscribe(args.topic, maxlen=ECHO_QUEUE) as messages:
+            print(f"mover echo: listening on {args.topic!r} in team {team.name!r}", file=sys.stderr)
+            async for msg in messages:
+                seen += 1
+                print(_echoed(msg, args.json), flush=True)
+                if args.count and seen >= args.count:
+                    break
     return 0
 
 
-def register_cancel(sub: Sub) -> None:
-    """Add ``mover cancel``."""
-    p = sub.add_parser(
-        "cancel",
-        help="end a run on every member (their finally blocks run)",
-        description="Cancels RUN on every member that knows it and prints each one's outcome.",
+class _Fixed:
+    """A locator at a fixed place (``mover echo --at``)."""
+
+    def __init__(self, pose: tuple[float, float, float]) -> None:
+        self.pose = pose
+
+    def position(self) -> tuple[float, float, float]:
+        return self.pose
+
+
+def _echoed(msg: Any, as_json: bool) -> str:
+    data = json.dumps(msg.data, default=_plain)
+    if as_json:
+        return json.dumps(
+            {
+                "sent": msg.sent,
+                "sender": msg.sender,
+                "distance": msg.distance,
+                "bearing": msg.bearing,
+                "data": json.loads(data),
+            }
+        )
+    stamp = time.strftime("%H:%M:%S", time.localtime(msg.sent))
+    where = (
+        f" {msg.distance:.2f} m at {math.degrees(msg.bearing or 0.0):+.0f}°"
+        if msg.distance is not None
+        else ""
     )
-    p.add_argument("run", type=member_name)
-    _team_options(p)
-    p.set_defaults(func=run_cancel)
-
-
-def run_cancel(args: argparse.Namespace) -> int:
-    team, config = team_from_args(args)
-    return asyncio.run(_cancel(team, config, args))
-
-
-async def _cancel(team: Team, config: NodeConfig, args: argparse.Namespace) -> int:
-    from ._node import Node
-    from ._programs import CANCEL_WAIT
-
-    async with Node(
-        f"cancel-{secrets.token_hex(3)}", team, kind="tool", config=config, observer=True
-    ) as node:
-        found, _ = await _find_run(node, args.run, args.wait)
-        if not found:
-            print(
-                f"mover cancel: no member of team {team.name!r} knows run {args.run!r}",
-                file=sys.stderr,
-            )
-            return 1
-
-        async def one(member: str) -> dict[str, Any]:
-            try:
-                outcome: dict[str, Any] = await node.call(
-                    member, "mover.cancel", args.run, f"mover cancel ({node.name})",
-                    timeout=CANCEL_WAIT + 5,
-                )  # fmt: skip
-                return outcome
-            except CallError as exc:
-                return {"error": f"{type(exc).__name__}: {exc}"}
-
-        members = sorted(found)
-        ends = await asyncio.gather(*(one(m) for m in members))
-    _print_outcomes(dict(zip(members, ends, strict=True)))
-    return 0
-
-
-# -- the last known team --------------------------------------------------------------------------
-
-
-def state_dir() -> Path:
-    """Where mover keeps its small state: $MOVER_STATE_DIR, else $XDG_STATE_HOME/mover, else
-    ~/.local/state/mover."""
-    if os.environ.get(STATE_ENV):
-        return Path(os.environ[STATE_ENV])
-    base = os.environ.get("XDG_STATE_HOME") or str(Path.home() / ".local" / "state")
-    return Path(base) / "mover"
-
-
-def _check_team(team: str, members: list[str]) -> None:
-    """Warn (one line on stderr) if ``members`` differ from the last ones found for ``team``;
-    remember them. A state file that cannot be read or written is not an error."""
-    path = state_dir() / "teams.json"
-    known: dict[str, Any] = {}
-    try:
-        with path.open("rb") as f:
-            loaded = json.loads(f.read(_STATE_LIMIT))
-        if isinstance(loaded, dict):
-            known = loaded
-    except (OSError, ValueError, RecursionError):
-        pass  # no file yet, or not ours to trust: start afresh
-    last = known.get(team)
-    if isinstance(last, list) and sorted(map(str, last)) != sorted(members):
-        gone = sorted(set(map(str, last)) - set(members))
-        new = sorted(set(members) - set(map(str, last)))
-        said = "; ".join(
-            part
-            for part in (
-                f"missing {', '.join(gone)}" if gone else "",
-                f"new {', '.join(new)}" if new else "",
-            )
-            if part
-        )
-        print(
-            f"mover run: warning: team {team!r} differs from its last run ({said}); "
-            f"starting on {', '.join(members)}",
-            file=sys.stderr,
-        )
-    known.pop(team, None)
-    known[team] = sorted(members)
-    while len(known) > _TEAMS_KEPT:
-        del known[next(iter(known))]
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_suffix(".tmp")
-        tmp.write_text(json.dumps(known))
-        tmp.replace(path)
-    except OSError as exc:
-        log.warning("cannot remember the team in %s: %s", path, exc)
-
-
-def _short(value: Any) -> str:
-    if isinstance(value, float):
-        return f"{value:.2f}"
-    if isinstance(value, list) and all(isinstance(v, float) for v in value):
-        return "[" + ", ".join(f"{v:.2f}" for v in value) + "]"
-    return str(value)
+    return f"{stamp} {msg.sender}{where}: {data}"

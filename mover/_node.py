@@ -12,6 +12,7 @@ context manager::
 from __future__ import annotations
 
 import asyncio
+import inspect
 import logging
 import time
 from collections import Counter
@@ -98,6 +99,7 @@ class Node:
         self._sessions = Sessions()
         self._refusal_log = _RateLimitedLog(name)
         self._server = RpcServer(self)
+        self._server.export(self.procedures, "mover.procedures")
         self._client = RpcClient(self)
         self._subs: dict[str, tuple[Any, list[Subscription]]] = {}
         self._publishers: dict[tuple[str, bool, bool], Any] = {}
@@ -230,6 +232,16 @@ class Node:
         """Let team members call ``fn`` (by ``name``, default its own). Usable as a decorator."""
         self._server.export(fn, name)
         return fn
+
+    def procedures(self) -> dict[str, dict[str, str]]:
+        """What this node exports (``mover.procedures``, for ``mover call ROBOT --list``): each
+        procedure's signature and the first paragraph of its docstring."""
+        out = {}
+        for name, e in self._server.exports.items():
+            first = (inspect.getdoc(e.fn) or "").strip().split("\n\n")[0]
+            doc = " ".join(first.split())
+            out[name] = {"signature": e.signature.describe(), "doc": doc[:160]}
+        return out
 
     def export_all(self, obj: Any) -> list[str]:
         """Export every function marked with ``@procedure`` in a module, object or mapping."""

@@ -147,6 +147,7 @@ class Signature:
             hints = typing.get_type_hints(fn)
         except Exception:  # unresolved forward references: check what we can
             hints = {}
+        self._hints = hints
         self.checks: dict[str, Check] = {}
         self.variadic: dict[str, inspect._ParameterKind] = {}
         for name, param in self.signature.parameters.items():
@@ -191,5 +192,17 @@ class Signature:
         return list(bound.args), dict(bound.kwargs)
 
     def describe(self) -> str:
-        """The signature as text (for listings)."""
-        return str(self.signature)
+        """The signature as text (for listings), with its annotations resolved where they can be
+        (``a: int``, not ``a: 'int'``)."""
+        hints = self._hints
+        params = [
+            p.replace(annotation=hints.get(p.name, p.annotation))
+            for p in self.signature.parameters.values()
+        ]
+        text = str(
+            self.signature.replace(
+                parameters=params,
+                return_annotation=hints.get("return", self.signature.return_annotation),
+            )
+        )
+        return text.replace("typing.", "")
