@@ -15,8 +15,8 @@ demo: $(STAMP)
 	$(VENV)/bin/mover demo
 
 test: $(STAMP)
-	$(PY) -m ruff check mover robots sim_hw programs experiments tests bench
-	$(PY) -m ruff format --check mover robots sim_hw programs experiments tests bench README.md
+	$(PY) -m ruff check mover robots sim_hw programs experiments tests bench examples
+	$(PY) -m ruff format --check mover robots sim_hw programs experiments tests bench examples README.md
 	$(PY) -m mypy
 	$(PY) -m pytest -q
 
