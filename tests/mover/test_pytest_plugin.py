@@ -18,13 +18,18 @@ pytest_plugins = ["pytester"]
 ROOT = Path(__file__).resolve().parents[2]
 
 HELLO = """
+import time
 from mover import launch
 
+ROBOTS = ["elvis", "ernst", "moseley"]
+
 async def test_hello(mover_world, mover_robots, mover_launcher):
-    await mover_world("worlds/search_and_rescue.toml", expect=2)
-    await mover_robots("ernst", "moseley")
-    outcomes = await launch(mover_launcher, "hello_team", ["ernst", "moseley"], {}, run="t1")
+    t0 = time.monotonic()
+    await mover_world("worlds/search_and_rescue.toml", expect=3)
+    await mover_robots(*ROBOTS)
+    outcomes = await launch(mover_launcher, "hello_team", ROBOTS, {}, run="t1")
     assert all("result" in o for o in outcomes.values()), outcomes
+    print(f"TOOK {time.monotonic() - t0:.1f} s")
 """
 
 DIES = """
@@ -39,6 +44,9 @@ async def test_a_robot_dies(mover_world, mover_robots, mover_launcher):
 
 async def test_a_robot_that_never_starts(mover_robots):
     await mover_robots("bad name/*")
+
+async def test_a_world_that_exits_early(mover_world):
+    await mover_world("worlds/broken.toml")
 """
 
 HANGS = """
@@ -59,13 +67,19 @@ def _suite(pytester: pytest.Pytester, **files: str) -> None:
     )
     (pytester.path / "worlds").mkdir()
     shutil.copy(ROOT / "worlds" / "search_and_rescue.toml", pytester.path / "worlds")
+    (pytester.path / "worlds" / "broken.toml").write_text('[world]\nsize = [10, "x"]\n')
     pytester.makepyfile(**files)
 
 
 def test_a_user_test_runs_a_program_on_real_processes(pytester: pytest.Pytester) -> None:
+    """Three robots and a lock-step world, ready by membership, a program run: the issue asks
+    for under 10 s; the bound here is looser so that a loaded machine does not fail it."""
     _suite(pytester, test_team=HELLO)
-    result = pytester.runpytest_subprocess("-q", "-p", "no:cacheprovider", timeout=120)
+    result = pytester.runpytest_subprocess("-q", "-s", "-p", "no:cacheprovider", timeout=120)
     result.assert_outcomes(passed=1)
+    took = [float(line.split()[1]) for line in result.outlines if line.startswith("TOOK")]
+    print(f"a 3-robot lock-step program through the plugin: {took[0] if took else None} s")
+    assert took and took[0] < 30.0, result.outlines
 
 
 def test_an_exit_fails_the_test_at_once_with_the_logs(pytester: pytest.Pytester) -> None:
@@ -73,11 +87,13 @@ def test_an_exit_fails_the_test_at_once_with_the_logs(pytester: pytest.Pytester)
     t0 = time.monotonic()
     result = pytester.runpytest_subprocess("-q", "-p", "no:cacheprovider", timeout=120)
     assert time.monotonic() - t0 < 50  # not the 60 s the first test would sleep
-    result.assert_outcomes(failed=2)
+    result.assert_outcomes(failed=3)
     text = result.stdout.str()
     assert "ernst exited with code -9 while the test ran: the test was stopped there" in text
     assert "mover log: ernst" in text  # the robot's log, attached
     assert "bad name/* exited with code" in text and "before bad name/* were ready" in text
+    # the world that rejected its file: its own words, from its log, in the failure
+    assert "before world were ready" in text and "size" in text
 
 
 def test_no_process_outlives_a_killed_pytest(pytester: pytest.Pytester, tmp_path: Path) -> None:
