@@ -25,7 +25,12 @@ async def _mover(c: Cluster, *args: str, bound: float = 30.0) -> tuple[int, str,
         sys.executable, "-m", "mover", *args, env=_env(c), cwd=ROOT,
         stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.PIPE,
     )  # fmt: skip
-    out, err = await asyncio.wait_for(proc.communicate(), bound)
+    try:
+        out, err = await asyncio.wait_for(proc.communicate(), bound)
+    finally:
+        if proc.returncode is None:  # a failed or cancelled test leaves no process behind
+            proc.kill()
+            await proc.wait()
     assert proc.returncode is not None
     return proc.returncode, out.decode(), err.decode()
 
