@@ -118,12 +118,6 @@ def report(out: str) -> list[str]:
 
 @pytest.mark.slow
 @pytest.mark.timeout(400)
-@pytest.mark.xfail(
-    strict=False,
-    reason="passes since lock-step runs repeat (issue 12, Build 4): 7 of 8 runs on a loaded "
-    "machine; one run's reports differed and its diff was not captured. Drop this mark once "
-    "it holds in CI",
-)
 async def test_the_demo_three_times_with_one_seed_gives_identical_reports(tmp_path: Path) -> None:
     reports = []
     for i in range(3):
