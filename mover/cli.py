@@ -26,6 +26,7 @@ import typing
 
 from ._config import NodeConfig, Team
 from ._keys import check_name as _check_name
+from ._orphans import guarded
 
 __all__ = [
     "LOG_LEVEL_ENV",
@@ -33,6 +34,7 @@ __all__ = [
     "UsageError",
     "add_log_arguments",
     "add_team_arguments",
+    "guarded",
     "interrupt_on_sigterm",
     "json_argument",
     "json_object",

@@ -19,7 +19,6 @@ SIGKILLed (Linux: a parent-death signal). ``pytest`` users get the same as fixtu
 from __future__ import annotations
 
 import asyncio
-import ctypes
 import os
 import signal
 import sys
@@ -31,6 +30,7 @@ from typing import Any
 
 from ._config import NodeConfig, Team, free_port
 from ._node import Node
+from ._orphans import guarded
 from ._programs import ProgramHost
 
 
@@ -44,12 +44,6 @@ class ProcessExited:
 
     def __str__(self) -> str:
         return f"{self.label} exited with code {self.returncode}"
-
-
-def _die_with_parent() -> None:  # pragma: no cover - runs in the child before exec
-    """Linux: ask for SIGKILL when the process that started us dies (PR_SET_PDEATHSIG)."""
-    with suppress(OSError, AttributeError):
-        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL, 0, 0, 0)
 
 
 @dataclass
@@ -114,16 +108,12 @@ class Cluster:
         err = open(log, "ab") if log is not None else None  # noqa: ASYNC230, SIM115
         try:
             proc = await asyncio.create_subprocess_exec(
-                sys.executable,
-                "-m",
-                module,
-                *args,
+                *guarded([sys.executable, "-m", module, *args]),
                 stdin=asyncio.subprocess.PIPE,
                 stdout=asyncio.subprocess.PIPE,
                 stderr=err,
                 env=env,
                 cwd=self.cwd,
-                preexec_fn=_die_with_parent if sys.platform == "linux" else None,
             )
         finally:
             if err is not None:

@@ -25,7 +25,6 @@ import contextlib
 import json
 import os
 import signal
-import sys
 import time
 from collections.abc import Awaitable
 from dataclasses import dataclass, field
@@ -36,6 +35,7 @@ from typing import IO, Any, TypeVar
 from .._config import NodeConfig, Team, free_port
 from .._exceptions import MoverError
 from .._node import Node
+from .._orphans import guarded
 from .._programs import PROGRESS_TOPIC, launch
 from ._plan import ProcessPlan, Seeds, processes, resolved, seeds, uses_router
 from ._teamfile import MAX_WAIT, SUPERVISOR, TeamPlan
@@ -52,15 +52,6 @@ LAST_LINES = 20
 """Lines of each process's output kept for the error when it exits."""
 MAX_LINE = 2**20
 """The longest output line read from a process (a longer one is cut)."""
-
-# Run before exec: SIGKILL when the parent dies (Linux), and no start if it already has.
-_GUARD = (
-    "import ctypes,os,sys\n"
-    "try: ctypes.CDLL(None).prctl(1, 9)\n"  # PR_SET_PDEATHSIG, SIGKILL
-    "except (OSError, AttributeError): pass\n"
-    "if os.getppid() != int(sys.argv[1]): sys.exit(70)\n"
-    "os.execv(sys.argv[2], sys.argv[2:])\n"
-)
 
 
 class UpError(Exception):
@@ -203,10 +194,9 @@ class Supervisor:
 
     async def _spawn(self, p: ProcessPlan, env: dict[str, str]) -> _Child:
         log = _open_log(self.out / f"{p.name}.log")
-        guard = (sys.executable, "-I", "-S", "-c", _GUARD, str(os.getpid()))
         try:
             proc = await asyncio.create_subprocess_exec(
-                *guard, *p.argv, env=env, stdin=asyncio.subprocess.DEVNULL,
+                *guarded(p.argv), env=env, stdin=asyncio.subprocess.DEVNULL,
                 stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.STDOUT,
                 start_new_session=True, limit=MAX_LINE,
             )  # fmt: skip

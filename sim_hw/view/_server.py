@@ -15,8 +15,6 @@ its one large dependency, 226 MB to download) and 521 MB installed (with pyarrow
 
 from __future__ import annotations
 
-import contextlib
-import ctypes
 import importlib.util
 import logging
 import os
@@ -29,7 +27,7 @@ from pathlib import Path
 from typing import IO
 from urllib.parse import quote
 
-from mover.cli import UsageError
+from mover.cli import UsageError, guarded
 
 log = logging.getLogger("sim_hw.view")
 
@@ -38,8 +36,6 @@ MEMORY_LIMIT = "512MiB"
 
 START_TIMEOUT = 20.0
 """Seconds the server has to start listening."""
-
-_PR_SET_PDEATHSIG = 1
 
 
 def rerun_binary() -> Path:
@@ -51,12 +47,6 @@ def rerun_binary() -> Path:
     if not exe.is_file():
         raise UsageError(f"rerun-sdk is installed without its viewer program ({exe})")
     return exe
-
-
-def _die_with_parent() -> None:  # runs in the child between fork and exec
-    with contextlib.suppress(OSError, AttributeError):
-        libc = ctypes.CDLL(None, use_errno=True)
-        libc.prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
 
 
 def _free(bind: str, port: int) -> bool:
@@ -121,12 +111,11 @@ class ViewerServer:
         ]  # fmt: skip
         env = {**os.environ, "RUST_LOG": "warn"}
         self._proc = subprocess.Popen(
-            args,
+            guarded(args, signal.SIGTERM),  # it dies with the view, a SIGKILLed one too
             stdin=subprocess.DEVNULL,
             stdout=subprocess.DEVNULL,
             stderr=self._err,
             env=env,
-            preexec_fn=_die_with_parent,  # a view starts it before any thread of its own
         )
         deadline = time.monotonic() + START_TIMEOUT
         while not (_listening(self.bind, self.port) and _listening(self.bind, self.grpc_port)):
