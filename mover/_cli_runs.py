@@ -20,7 +20,7 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ._cli_verbs import NO_ANSWER, _plain, _statuses, _team_options
+from ._cli_verbs import NO_ANSWER, _plain, _statuses, _team_options, observe
 from ._config import NodeConfig, Team
 from ._exceptions import CallError
 from ._keys import check_name
@@ -277,16 +277,7 @@ def run_runs(args: argparse.Namespace) -> int:
 
 
 async def _runs(team: Team, config: NodeConfig, args: argparse.Namespace) -> int:
-    from ._node import Node
-
-    async with Node(
-        f"runs-{secrets.token_hex(3)}", team, kind="tool", config=config, observer=True
-    ) as node:
-        await asyncio.sleep(args.wait)
-        names = sorted(
-            n for n in node.team.members() if (i := node.team.info(n)) and i.kind != "tool"
-        )
-        statuses = await _statuses(node, names)
+    _, statuses = await observe(team, config, args.wait, "runs")
     runs: dict[str, dict[str, Any]] = {}
     for member, entries in statuses.items():
         for entry in entries if isinstance(entries, list) else ():

@@ -80,15 +80,7 @@ def run_ps(args: argparse.Namespace) -> int:
 
 
 async def _ps(team: Team, config: NodeConfig, args: argparse.Namespace) -> int:
-    from ._node import Node
-
-    async with Node(
-        f"ps-{secrets.token_hex(3)}", team, kind="tool", config=config, observer=True
-    ) as node:
-        await asyncio.sleep(args.wait)
-        infos = [node.team.info(n) for n in sorted(node.team.members())]
-        rows = [i for i in infos if i is not None]
-        statuses = await _statuses(node, [i.name for i in rows if i.kind != "tool"])
+    rows, statuses = await observe(team, config, args.wait, "ps")
     if args.json:
         for i in rows:
             status = statuses.get(i.name, NO_PROGRAMS)
@@ -123,6 +115,23 @@ async def _ps(team: Team, config: NodeConfig, args: argparse.Namespace) -> int:
             f"{run:<24} {phase:<12} {i.host}"
         )
     return 0
+
+
+async def observe(
+    team: Team, config: NodeConfig, wait: float, tag: str
+) -> tuple[list[Any], dict[str, list[dict[str, Any]] | str]]:
+    """The team's members as an observer (not a member) sees them after ``wait`` seconds, and
+    each one's ``mover.status`` (tools are not asked)."""
+    from ._node import Node
+
+    async with Node(
+        f"{tag}-{secrets.token_hex(3)}", team, kind="tool", config=config, observer=True
+    ) as node:
+        await asyncio.sleep(wait)
+        infos = [node.team.info(n) for n in sorted(node.team.members())]
+        rows = [i for i in infos if i is not None]
+        statuses = await _statuses(node, [i.name for i in rows if i.kind != "tool"])
+    return rows, statuses
 
 
 async def _statuses(node: Node, members: list[str]) -> dict[str, list[dict[str, Any]] | str]:

@@ -9,12 +9,10 @@ import math
 import random
 import time
 from collections.abc import AsyncIterator
-from contextlib import AsyncExitStack
 
 import pytest
-import pytest_asyncio
 
-from mover import MemberLost, Node, NodeConfig, TaskTeam, Team, free_port
+from mover import MemberLost, Node, TaskTeam
 
 DT = 0.1  # simulated seconds per tick
 
@@ -89,27 +87,6 @@ class FakeClock:
     def release(self) -> None:
         self.world.engaged.discard(self.name)
         self.world.notify()
-
-
-@pytest_asyncio.fixture
-async def nodes() -> AsyncIterator[list[Node]]:
-    team = Team.generate("alpha")
-    port = free_port()
-    async with AsyncExitStack() as stack:
-        out = [
-            await stack.enter_async_context(
-                Node("n0", team, config=NodeConfig(listen=(f"tcp/127.0.0.1:{port}",)))
-            )
-        ]
-        for i in range(1, 5):
-            out.append(
-                await stack.enter_async_context(
-                    Node(f"n{i}", team, config=NodeConfig(connect=(f"tcp/127.0.0.1:{port}",)))
-                )
-            )
-        for n in out:
-            await n.team.wait_for({f"n{i}" for i in range(5)}, timeout=10)
-        yield out
 
 
 def timed_teams(

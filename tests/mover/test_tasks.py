@@ -3,34 +3,10 @@
 from __future__ import annotations
 
 import asyncio
-from collections.abc import AsyncIterator
-from contextlib import AsyncExitStack
 
 import pytest
-import pytest_asyncio
 
-from mover import MemberLost, Node, NodeConfig, OperationFailed, TaskTeam, Team, free_port
-
-
-@pytest_asyncio.fixture
-async def nodes() -> AsyncIterator[list[Node]]:
-    team = Team.generate("alpha")
-    port = free_port()
-    async with AsyncExitStack() as stack:
-        out = [
-            await stack.enter_async_context(
-                Node("n0", team, config=NodeConfig(listen=(f"tcp/127.0.0.1:{port}",)))
-            )
-        ]
-        for i in range(1, 5):
-            out.append(
-                await stack.enter_async_context(
-                    Node(f"n{i}", team, config=NodeConfig(connect=(f"tcp/127.0.0.1:{port}",)))
-                )
-            )
-        for n in out:
-            await n.team.wait_for({f"n{i}" for i in range(5)}, timeout=10)
-        yield out
+from mover import MemberLost, Node, OperationFailed, TaskTeam
 
 
 def teams(nodes: list[Node], run: str = "r", **kw: object) -> list[TaskTeam]:
