@@ -22,7 +22,11 @@ Fixtures:
   once it is a member of the team;
 * ``mover_robots(*names, hardware="sim")`` — robot processes, ready once they are members;
 * ``mover_member(module, name, *args)`` — ``python -m module name args`` (e.g. a module that
-  runs :func:`~mover.testing.serve_programs`), ready once ``name`` is a member.
+  runs :func:`~mover.testing.serve_programs`), ready once ``name`` is a member;
+* ``mover_up(team_file, *args)`` — ``mover up`` of a team file (relative to the test file)
+  with a fresh key, ready once it says so (by membership); returns an :class:`UpTeam` whose
+  ``node`` is a member of that team (launch programs with it) and ``out`` its run folder;
+  stopped with Ctrl-C at the end, its processes' logs in a failed test's report.
 
 What they promise: readiness is membership, never a sleep; a process that exits before it is
 ready fails the test at once with the end of its log, and so does one that exits while the test
@@ -34,16 +38,22 @@ failed test's report; every process dies with the test run, even when pytest is 
 from __future__ import annotations
 
 import asyncio
+import os
+import re
 import secrets
+import signal
+import sys
 from collections.abc import AsyncIterator, Awaitable, Callable, Generator, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import pytest
 import pytest_asyncio
 
-from ._config import Team
+from ._config import NodeConfig, Team
 from ._node import Node
+from ._orphans import guarded
 from .testing import Cluster, cluster
 
 READY_TIMEOUT = 60.0
@@ -52,6 +62,8 @@ LOG_TAIL = 60
 """Lines of each process's log put into a failed test's report."""
 
 _CLUSTER = pytest.StashKey[Cluster]()
+_UP_LOGS = pytest.StashKey[list[Path]]()
+_READY = re.compile(r"ready in .*MOVER_TEAM=(\S+) MOVER_CONNECT=(\S+)")
 _CALL_FAILED = pytest.StashKey[bool]()
 
 
@@ -133,6 +145,69 @@ async def mover_member(mover_cluster: Cluster, mover_launcher: Node) -> Starter:
     return start
 
 
+@dataclass
+class UpTeam:
+    """A team ``mover up`` started: a member node of the test's in it, the run folder, and
+    what ``mover up`` printed so far."""
+
+    node: Node
+    out: Path
+    lines: list[str]
+    proc: asyncio.subprocess.Process
+
+
+@pytest_asyncio.fixture
+async def mover_up(request: pytest.FixtureRequest, tmp_path: Path) -> AsyncIterator[Starter]:
+    """``await mover_up(team_file, *args)``: a team from a team file, ready (see the module)."""
+    started: list[tuple[asyncio.subprocess.Process, Node]] = []
+    logs = request.node.stash.setdefault(_UP_LOGS, [])
+
+    async def start(team_file: str, *args: str) -> UpTeam:
+        out = tmp_path / f"up-{len(started)}"
+        logs.append(out)
+        key = secrets.token_bytes(32)
+        env = {**os.environ, "MOVER_TEAM_KEY": key.hex()}
+        env.pop("MOVER_TEAM_KEY_FILE", None)
+        argv = [sys.executable, "-m", "mover._cli", "up", team_file, "--out", str(out), *args]
+        proc = await asyncio.create_subprocess_exec(
+            *guarded(argv), env=env, cwd=request.path.parent, start_new_session=True,
+            stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.STDOUT,
+        )  # fmt: skip
+        lines: list[str] = []
+        assert proc.stdout is not None
+        try:
+            async with asyncio.timeout(READY_TIMEOUT):
+                while (ready := _READY.search(lines[-1] if lines else "")) is None:
+                    line = (await proc.stdout.readline()).decode(errors="replace")
+                    if not line:
+                        tail = "\n".join(lines[-LOG_TAIL:])
+                        pytest.fail(f"mover up {team_file} exited before it was ready:\n{tail}")
+                    lines.append(line.rstrip())
+        except TimeoutError:
+            proc.kill()
+            pytest.fail(f"mover up {team_file} was not ready within {READY_TIMEOUT:g} s")
+        name, endpoint = ready.group(1), ready.group(2)
+        router = any("router on" in line for line in lines)
+        config = NodeConfig(mode="client" if router else "peer", connect=(endpoint,))
+        node = Node(f"test-{secrets.token_hex(2)}", Team(name, key), kind="tool", config=config)
+        await node.__aenter__()
+        started.append((proc, node))
+        return UpTeam(node, out, lines, proc)
+
+    try:
+        yield start
+    finally:
+        for proc, node in started:
+            await node.__aexit__(None, None, None)
+            if proc.returncode is None:
+                proc.send_signal(signal.SIGINT)
+            try:
+                await asyncio.wait_for(proc.wait(), 20)
+            except TimeoutError:
+                proc.kill()
+                await proc.wait()
+
+
 async def _ready(c: Cluster, node: Node, names: Sequence[str]) -> None:
     """Wait until ``names`` are members; fail at once if one of the processes exits first."""
     waiting = asyncio.ensure_future(node.team.wait_for(list(names), timeout=READY_TIMEOUT))
@@ -184,6 +259,11 @@ def pytest_runtest_makereport(
 ) -> Generator[None, pytest.TestReport, pytest.TestReport]:
     """A failed test's report gets the end of every process's log."""
     report = yield
+    if report.failed:
+        for out in item.stash.get(_UP_LOGS, []):
+            for path in sorted(out.glob("*.log")):
+                lines = path.read_text(errors="replace").splitlines()
+                report.sections.append((f"mover up log: {path.stem}", "\n".join(lines[-LOG_TAIL:])))
     c = item.stash.get(_CLUSTER, None)
     if report.when == "call":
         item.stash[_CALL_FAILED] = report.failed

@@ -61,6 +61,36 @@ async def test_hangs(mover_world, mover_robots):
 """
 
 
+UP = """
+from mover import launch
+
+async def test_a_team_file(mover_up):
+    team = await mover_up("team.toml")
+    assert (team.out / "world.log").exists()
+    outcomes = await launch(team.node, "hello_team", ["ernst", "moseley"], {}, run="t1")
+    assert all("result" in o for o in outcomes.values()), outcomes
+"""
+
+TEAM = """
+[team]
+name = "plugin"
+
+[world]
+file = "worlds/search_and_rescue.toml"
+expect = 2
+
+[[robots]]
+names = ["ernst", "moseley"]
+"""
+
+
+def test_a_team_file_comes_up_for_a_test(pytester: pytest.Pytester) -> None:
+    _suite(pytester, test_up=UP)
+    (pytester.path / "team.toml").write_text(TEAM)
+    result = pytester.runpytest_subprocess("-q", "-p", "no:cacheprovider", timeout=120)
+    result.assert_outcomes(passed=1)
+
+
 def _suite(pytester: pytest.Pytester, **files: str) -> None:
     pytester.makeini(
         "[pytest]\nasyncio_mode = auto\nasyncio_default_fixture_loop_scope = function\n"
