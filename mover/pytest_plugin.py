@@ -192,6 +192,14 @@ async def mover_up(request: pytest.FixtureRequest, tmp_path: Path) -> AsyncItera
         node = Node(f"test-{secrets.token_hex(2)}", Team(name, key), kind="tool", config=config)
         await node.__aenter__()
         started.append((proc, node))
+        # ready by membership here too: every process mover up started (a log each; the
+        # router is no member) is seen by the test's node before the test goes on
+        names = [p.stem for p in out.glob("*.log") if p.stem != "router"]
+        try:
+            await node.team.wait_for(names, timeout=READY_TIMEOUT)
+        except TimeoutError:
+            missing = [n for n in names if n not in node.team]
+            pytest.fail(f"{', '.join(missing)} of {team_file} not seen within {READY_TIMEOUT:g} s")
         return UpTeam(node, out, lines, proc)
 
     try:
