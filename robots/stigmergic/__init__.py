@@ -8,12 +8,32 @@ they come from; eye-bots learn from what they see. Both behaviours are plain obj
 
 * :class:`EyeBot` — sections 4.1–4.3 (:class:`Policy`, eq. 1, the draw rule);
 * :class:`FootBot` — sections 4.3–4.4 (instructions, the forward/backward rule, LEDs).
+
+As robot processes: each kind's hardware (:class:`EyeBotHardware`, :class:`FootBotHardware`:
+protocols of its devices, no ground truth) and a loop that drives its behaviour on it
+(:func:`eyebot_loop`, :func:`footbot_loop`).
 """
 
 from robots.stigmergic._eyebot import EyeBot, FootBotSeen, Goal, Instruction, trip_weight
 from robots.stigmergic._footbot import FootBot, FootCommand, FootPerception, Heard, Mode, Motion
+from robots.stigmergic._hal import (
+    AreaSensor,
+    DownCamera,
+    EyeBotHardware,
+    FootBotHardware,
+    Hanging,
+    IrRB,
+    OmniCamera,
+    Spot,
+    UpCamera,
+    eyebot_procedures,
+    footbot_procedures,
+    footbot_seen,
+    obstacle_bearing,
+)
 from robots.stigmergic._leds import read as read_leds
 from robots.stigmergic._leds import show as show_leds
+from robots.stigmergic._loops import AVOID, Trip, eyebot_loop, footbot_loop, perceive
 from robots.stigmergic._policy import (
     DIRECTIONS,
     SPACING,
@@ -24,22 +44,40 @@ from robots.stigmergic._policy import (
 )
 
 __all__ = [
+    "AVOID",
     "DIRECTIONS",
     "SPACING",
+    "AreaSensor",
+    "DownCamera",
     "EyeBot",
+    "EyeBotHardware",
     "FootBot",
+    "FootBotHardware",
     "FootBotSeen",
     "FootCommand",
     "FootPerception",
     "Goal",
+    "Hanging",
     "Heard",
     "Instruction",
+    "IrRB",
     "Learning",
     "Mode",
     "Motion",
+    "OmniCamera",
     "Policy",
+    "Spot",
+    "Trip",
+    "UpCamera",
     "direction_angle",
     "direction_index",
+    "eyebot_loop",
+    "eyebot_procedures",
+    "footbot_loop",
+    "footbot_procedures",
+    "footbot_seen",
+    "obstacle_bearing",
+    "perceive",
     "read_leds",
     "show_leds",
     "trip_weight",

@@ -10,20 +10,24 @@ Public face (everything else is private and may change):
 * backends of ``robots.hal`` — :func:`in_process` and :func:`remote` (over a ``mover.Node``),
   both built on :class:`SimHardware`;
 * the ceiling layer — :class:`Ceiling` of :class:`EyeBotSpec` (eye-bots above the world and the
-  devices between them and the foot-bots below);
+  devices between them and the foot-bots below); in a world process, eye-bots and foot-bots
+  are robot processes of their own kinds (the ``eyebot`` and ``footbot`` backends, the areas
+  of :class:`AreaSpec`);
 * recording — :class:`Recorder`, :func:`read_recording`, :func:`plot_recording`;
 * the world process — :func:`serve_world` (exports the world over zenoh).
 """
 
 from sim_hw._lockstep import RobotDropped
 
-from ._ceiling import Below, Ceiling, EyeBotSpec
+from ._ceiling import Below, Ceiling
 from ._generate import corridor_paths, double_corridor, free_points, random_obstacles
 from ._hardware import SimHardware, in_process, remote
 from ._record import Recorder, plot_recording, read_recording
 from ._spec import (
+    AreaSpec,
     BoxSpec,
     CameraSpec,
+    EyeBotSpec,
     ImmovableSpec,
     MarkerSpec,
     ObstacleSpec,
@@ -40,6 +44,7 @@ __all__ = [
     "DT",
     "STEPS_PER_TICK",
     "TICK",
+    "AreaSpec",
     "Below",
     "BoxSpec",
     "CameraSpec",

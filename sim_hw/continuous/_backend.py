@@ -1,9 +1,16 @@
-"""The ``sim`` hardware backend: a body in the continuous world process, over zenoh.
+"""The hardware backends of the continuous world process, over zenoh.
 
-Installed as the ``mover.hardware`` entry point ``sim`` (``mover robot --hardware sim``): it
-joins the world process named by the ``world`` option (default ``"world"``) through
-:func:`~sim_hw.continuous._hardware.remote`, and offers the robot process the procedures of a
-robot with a body (:func:`robots.procedures.body_procedures`).
+``sim`` (``mover robot --hardware sim``): a body in the world; it joins the world process named
+by the ``world`` option (default ``"world"``) through :func:`~sim_hw.continuous._hardware.remote`,
+and offers the robot process the procedures of a robot with a body
+(:func:`robots.procedures.body_procedures`).
+
+``eyebot`` and ``footbot``: the two kinds of Ducatelle et al.'s heterogeneous swarm in a world
+whose file hangs eye-bots from the ceiling (``_skyworld``): each gets the HAL of its kind
+(``robots.stigmergic``: :class:`EyeBotHardware`, :class:`FootBotHardware`) and exports that
+kind's ``robot.*`` procedures. A backend per kind, as ``sim`` and ``grid`` are, because the two
+have different hardware types: the process is handed exactly its kind's devices, and the world
+refuses a join of the wrong kind at once.
 """
 
 from __future__ import annotations
@@ -13,8 +20,16 @@ from typing import TYPE_CHECKING, Any
 
 from robots.hal import Hardware
 from robots.procedures import body_procedures
+from robots.stigmergic import (
+    EyeBotHardware,
+    FootBotHardware,
+    eyebot_procedures,
+    footbot_procedures,
+)
 
 from ._hardware import remote
+from ._kinds import join_remote
+from ._skyworld import EYEBOT, FOOTBOT
 
 if TYPE_CHECKING:
     from mover import Node
@@ -48,3 +63,59 @@ class ContinuousBackend:
 
 
 BACKEND: HardwareBackend[Hardware] = ContinuousBackend()
+
+
+class EyeBotBackend:
+    """Joins a continuous world process as one of its eye-bots; a ``HardwareBackend``."""
+
+    options = frozenset({"world", "call_timeout"})
+
+    async def connect(
+        self, node: Node, robot_id: str, spec: Mapping[str, Any], **options: Any
+    ) -> EyeBotHardware:
+        """Join the world ``world`` (default ``"world"``) as the eye-bot ``robot_id`` (one of
+        its file's ``[[eyebots]]``; ``spec`` must be empty). ``call_timeout`` as for ``sim``."""
+        hw = await join_remote(
+            node,
+            robot_id,
+            EYEBOT,
+            spec,
+            world=str(options.get("world", "world")),
+            call_timeout=float(options.get("call_timeout", 30.0)),
+        )
+        assert isinstance(hw, EyeBotHardware)
+        return hw
+
+    def procedures(self, hw: EyeBotHardware) -> Mapping[str, Callable[..., Any]]:
+        """``robot.pose``, ``robot.stop``, ``robot.sense`` of an eye-bot."""
+        return eyebot_procedures(hw)
+
+
+class FootBotBackend:
+    """Joins a continuous world process with a ceiling as a foot-bot; a ``HardwareBackend``."""
+
+    options = frozenset({"world", "call_timeout"})
+
+    async def connect(
+        self, node: Node, robot_id: str, spec: Mapping[str, Any], **options: Any
+    ) -> FootBotHardware:
+        """Join the world ``world`` (default ``"world"``) as the foot-bot ``robot_id`` with
+        body ``spec`` (over the world file's). ``call_timeout`` as for ``sim``."""
+        hw = await join_remote(
+            node,
+            robot_id,
+            FOOTBOT,
+            spec,
+            world=str(options.get("world", "world")),
+            call_timeout=float(options.get("call_timeout", 30.0)),
+        )
+        assert isinstance(hw, FootBotHardware)
+        return hw
+
+    def procedures(self, hw: FootBotHardware) -> Mapping[str, Callable[..., Any]]:
+        """``robot.pose``, ``robot.stop``, ``robot.sense`` of a foot-bot."""
+        return footbot_procedures(hw)
+
+
+EYEBOT_BACKEND: HardwareBackend[EyeBotHardware] = EyeBotBackend()
+FOOTBOT_BACKEND: HardwareBackend[FootBotHardware] = FootBotBackend()

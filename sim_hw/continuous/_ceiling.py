@@ -27,23 +27,11 @@ import numpy as np
 
 from robots.stigmergic import read_leds
 
-from ._spec import Vec
+from ._spec import EyeBotSpec, Vec
 from ._world import World
 
 FOOT_LED = 0.08
 """How far ahead of a foot-bot's beacon its front LED is (m): its radius, about."""
-
-
-@dataclass(frozen=True, slots=True)
-class EyeBotSpec:
-    """An eye-bot on the ceiling above ``center``, its reference direction θ0 = ``heading``;
-    its camera sees a disc of radius ``view`` on the ground, its broadcast reaches ``cone``."""
-
-    id: str
-    center: Vec
-    heading: float = 0.0
-    view: float = 1.0
-    cone: float = 0.5
 
 
 @dataclass(frozen=True, slots=True)

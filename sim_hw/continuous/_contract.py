@@ -48,3 +48,38 @@ class Readings(TypedDict):
     """``[value, colour]`` of the floor cell under the robot."""
     push: list[Any] | None
     """``[object id or None, displacement m]`` of the push under way, or None."""
+
+
+# -- the ceiling (worlds with eye-bots: ``sim_hw.continuous._skyworld``) ----------------------
+
+
+class EyeCommand(TypedDict, total=False):
+    """An eye-bot's command for the next tick; a missing key keeps its last value."""
+
+    irrb: list[float]
+    """``[θ_s, θ_t]`` (radians relative to θ0): what its IrRB cone sends from now on."""
+
+
+class EyeReadings(TypedDict):
+    """What an eye-bot measured at the end of a tick."""
+
+    tick: int
+    """Ticks done."""
+    t: float
+    """Simulated seconds."""
+    below: list[list[Any]]
+    """The downward camera: ``[bx, by, fx, fy, led]`` per foot-bot in view, its beacon (b) and
+    front LED (f; None, None when off) in the eye-bot's frame (m, x along θ0)."""
+
+
+class FootReadings(Readings):
+    """A foot-bot's readings: a ground robot's, and the devices that look up."""
+
+    above: list[Any] | None
+    """``[eye-bot, θ0, θ_s, θ_t]``: the eye-bot whose cone it is in, θ0 as its upward camera
+    reads it (radians in the foot-bot's frame) and the instruction last sent; None under no
+    eye-bot (or one that has sent nothing yet)."""
+    omni: list[list[float]]
+    """``[distance, bearing]`` of each eye-bot the omnidirectional camera sees, nearest first."""
+    area: str | None
+    """The id of the area the robot is in (``source``, ``target``), or None."""

@@ -59,7 +59,7 @@ class SimHardware:
         self._floor: list[Any] | None = None
         self._pump: asyncio.Task[None] | None = None
         self._pumps = 0
-        self.max_speed = float(spec["max_speed"])
+        self.max_speed = float(spec.get("max_speed", 0.0))  # an eye-bot has no drive
 
     @property
     def readings(self) -> Readings:

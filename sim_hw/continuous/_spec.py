@@ -132,6 +132,28 @@ class MarkerSpec:
 
 
 @dataclass(frozen=True, slots=True)
+class EyeBotSpec:
+    """An eye-bot on the ceiling above ``center``, its reference direction θ0 = ``heading``;
+    its camera sees a disc of radius ``view`` on the ground, its broadcast reaches ``cone``
+    (Ducatelle et al.; see ``sim_hw.continuous._ceiling``)."""
+
+    id: str
+    center: Vec
+    heading: float = 0.0
+    view: float = 1.0
+    cone: float = 0.5
+
+
+@dataclass(frozen=True, slots=True)
+class AreaSpec:
+    """A disc of floor a robot's area sensor tells apart (the source or the target, say)."""
+
+    id: str
+    center: Vec
+    radius: float = 1.0
+
+
+@dataclass(frozen=True, slots=True)
 class WorldSpec:
     """A rectangular arena [0, w] × [0, h] with walls, and what is in it."""
 
@@ -149,3 +171,9 @@ class WorldSpec:
     markers: tuple[MarkerSpec, ...] = ()
     floor: tuple[tuple[int, int, int, str], ...] = ()
     """Preset floor cells: (column, row, value, colour)."""
+    eyebots: tuple[EyeBotSpec, ...] = ()
+    """Eye-bots on the ceiling (robot processes of their own kind; not bodies of the physics)."""
+    areas: tuple[AreaSpec, ...] = ()
+    """Areas the robots' area sensors tell apart (with eye-bots: ``source`` and ``target``)."""
+    omni_range: float = 3.0
+    """How far the robots' omnidirectional cameras see eye-bots (m, horizontally)."""

@@ -4,7 +4,8 @@
 (``sim_hw._lockstep``): robots are in the world as soon as they join (``admits_early``) and
 are re-created in id order when the expected ones are in, so that the run does not depend on
 the order they came in — their first readings (from the join) may, so a deterministic robot
-ticks once before its first decision.
+ticks once before its first decision. A world with eye-bots is served by the two-layer
+stepper of ``_skyworld`` (:func:`stepper_for`).
 """
 
 from __future__ import annotations
@@ -81,6 +82,15 @@ class WorldStepper:
         self.world.remove_robot(robot)
 
 
+def stepper_for(world: World) -> WorldStepper:
+    """The door's stepper for ``world``: with eye-bots on its ceiling, the two-layer one."""
+    if world.spec.eyebots:
+        from ._skyworld import SkyStepper  # it builds on WorldStepper: imported when needed
+
+        return SkyStepper(world)
+    return WorldStepper(world)
+
+
 class WorldServer(LockstepDoor[WorldStepper]):
     """Runs a :class:`World` in lock-step or in (scaled) real time for robots that join it.
 
@@ -106,7 +116,7 @@ class WorldServer(LockstepDoor[WorldStepper]):
         if speed <= 0:
             raise ValueError("speed must be positive")
         super().__init__(
-            WorldStepper(world),
+            stepper_for(world),
             expect=expect,
             timeout=timeout,
             speed=None if lockstep else speed,

@@ -2,7 +2,9 @@
 
 A world file has a ``[world]`` table (``size``, ``name``, ``cell``), an optional ``[robot]`` table
 of robot defaults, and arrays of tables ``[[robots]]``, ``[[obstacles]]``, ``[[boxes]]``,
-``[[immovables]]``, ``[[targets]]``, ``[[resources]]``, ``[[beacons]]``, ``[[floor]]``; or a
+``[[immovables]]``, ``[[targets]]``, ``[[resources]]``, ``[[beacons]]``, ``[[floor]]``, the
+ceiling's ``[[eyebots]]`` (``id``, ``center``, ``heading``, ``view``, ``cone``), ``[[areas]]``
+(``id``, ``center``, ``radius``) and ``[ceiling]`` (``omni_range``); or a
 ``[generator]`` table (``kind = "random_obstacles"`` or ``"double_corridor"``) that builds the
 arena, to which the arrays are added. Lengths are metres, masses kilograms, forces newtons;
 **angles in files are degrees**. Unknown keys are errors (a typo must not pass silently).
@@ -27,8 +29,10 @@ from mover.cli import member_name
 
 from ._generate import double_corridor, random_obstacles
 from ._spec import (
+    AreaSpec,
     BoxSpec,
     CameraSpec,
+    EyeBotSpec,
     ImmovableSpec,
     MarkerSpec,
     ObstacleSpec,
@@ -49,6 +53,8 @@ MAX_RAYS = 360
 """The most rays a sonar may have."""
 MAX_FILE_BYTES = 16 * 2**20
 """The largest world file read."""
+MAX_EYEBOTS = 1000
+"""The most eye-bots a world file may hang from the ceiling."""
 
 
 class WorldFileError(ValueError):
@@ -322,6 +328,49 @@ def _marker(t: _Table, kind: str) -> MarkerSpec:
     )
 
 
+def _eyebot(t: _Table) -> EyeBotSpec:
+    eid = t.string("id")
+    try:
+        member_name(eid)  # an eye-bot's id is its process's name in the team
+    except argparse.ArgumentTypeError as exc:
+        raise t.fail("id", str(exc)) from None
+    view = t.number("view", 1.0)
+    return EyeBotSpec(
+        eid,
+        t.vector("center", 2),
+        heading=math.radians(t.number("heading", 0.0, low=None)),
+        view=view,
+        cone=t.number("cone", min(0.5, view)),
+    )
+
+
+def _area(t: _Table) -> AreaSpec:
+    return AreaSpec(t.string("id"), t.vector("center", 2), t.number("radius", 1.0))
+
+
+def _ceiling(top: _Table, spec: WorldSpec, source: str) -> WorldSpec:
+    """The ceiling's sections: ``[ceiling]``, ``[[eyebots]]``, ``[[areas]]``."""
+    omni = spec.omni_range
+    ct = top.table("ceiling")
+    if ct is not None:
+        omni = ct.number("omni_range", omni)
+        ct.done()
+    eyes = [_finish(t, _eyebot(t)) for t in top.tables("eyebots")]
+    if len(eyes) > MAX_EYEBOTS:
+        raise WorldFileError(source, "eyebots", f"at most {MAX_EYEBOTS}, got {len(eyes)}")
+    areas = [_finish(t, _area(t)) for t in top.tables("areas")]
+    for key, ids in (("eyebots", [e.id for e in eyes]), ("areas", [a.id for a in areas])):
+        for i, ident in enumerate(ids):
+            if ident in ids[:i] or (key == "eyebots" and ident in spec.robots):
+                raise WorldFileError(source, f"{key}[{i}].id", f"{ident!r} is already used")
+    return replace(
+        spec,
+        eyebots=spec.eyebots + tuple(eyes),
+        areas=spec.areas + tuple(areas),
+        omni_range=omni,
+    )
+
+
 def _generated(t: _Table) -> WorldSpec:
     kind = t.string("kind")
     if kind == "random_obstacles":
@@ -358,6 +407,9 @@ SECTIONS = {
     "beacons",
     "floor",
     "generator",
+    "ceiling",
+    "eyebots",
+    "areas",
 }
 
 
@@ -406,6 +458,7 @@ def parse_world(data: Any, source: str) -> WorldSpec:
         i, j = t.integer("cell_x"), t.integer("cell_y")
         floor.append((i, j, t.integer("value", 0, low=-(2**62)), t.string("colour", "")))
         t.done()
+    spec = _ceiling(top, replace(spec, robots=robots), source)
     top.done()
     spec = replace(
         spec,

@@ -1,0 +1,124 @@
+"""Cooperative stigmergic navigation (Ducatelle, Di Caro and Gambardella, SAB 2010) as robot
+processes: every eye-bot and every foot-bot is a member of the team, of its own kind.
+
+Eye-bots hang from the ceiling and learn, from the foot-bots they see below, which way the
+source and the target lie; foot-bots follow their instructions between the two. Both kinds run
+this program: the team agrees on a start tick, then one ``distributed_and`` in which each
+eye-bot runs its loop (:func:`robots.stigmergic.eyebot_loop`) and each foot-bot its own
+(:func:`robots.stigmergic.footbot_loop`) for ``duration`` simulated seconds; with everyone's
+results, every member reports the run's figures as the paper measures them (section 5): ``t_1``
+the time until the first foot-bot reaches the target, ``t_a`` the mean duration of the trips
+after each foot-bot's first.
+
+Every random choice comes from ``team.rng`` (the run's seed): run it again with the same seed
+on a lock-step world and it repeats.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from mover import RunTeam
+from robots import Robot
+from robots.stigmergic import (
+    EyeBot,
+    EyeBotHardware,
+    FootBot,
+    FootBotHardware,
+    Goal,
+    Learning,
+    Motion,
+    eyebot_loop,
+    footbot_loop,
+)
+
+#: Ticks between the latest member's tick when the team agreed and the common start.
+START_LEAD = 20
+
+
+async def stigmergic_navigation(
+    robot: Robot[Any],
+    team: RunTeam,
+    duration: float = 300.0,
+    period: float = 1.0,
+    c_a: float = 0.5,
+    c_m: float = 0.99,
+    q: float = 0.5,
+    d: float = 2.0,
+    speed: float = 0.3,
+) -> dict[str, Any]:
+    """Navigate (foot-bots) and learn (eye-bots) for ``duration`` simulated seconds.
+
+    ``period`` is the eye-bots' time step, ``c_a``, ``c_m``, ``q`` their learning (eq. 1; the
+    paper's section 5), ``d`` and ``speed`` the foot-bots' leg length and speed. Returns the
+    team's figures (``t_1``, ``t_a``, ``t_a_all``, ``trips``, seconds after the start) and this
+    member's own result (``me``: an eye-bot's policies, a foot-bot's trips as
+    ``[goal, start, end]`` in simulated seconds).
+    """
+    hw = robot.hw
+    if not isinstance(hw, EyeBotHardware | FootBotHardware):
+        raise TypeError(f"{robot.id} is neither an eye-bot nor a foot-bot ({type(hw).__name__})")
+    rng = np.random.default_rng(team.rng("stigmergic").getrandbits(128))
+    start = await _start(hw, team)
+    until = start + duration
+    wall = time.perf_counter()
+
+    async def navigate() -> dict[str, Any]:
+        if isinstance(hw, EyeBotHardware):
+            eyebot = EyeBot(rng, Learning(c_a=c_a, c_m=c_m, q=q))
+            return {"eyebot": await eyebot_loop(hw, eyebot, period, until)}
+        footbot = FootBot(rng, Goal.TARGET, Motion(d=d, speed=speed, dt=hw.clock.tick_period))
+        trips = await footbot_loop(hw, footbot, until)
+        return {"trips": [t.wire() for t in trips]}
+
+    everyone = await team.distributed_and(navigate)
+    wall = time.perf_counter() - wall
+    figures = travel_times(
+        {m: r["trips"] for m, r in everyone.items() if isinstance(r, dict) and "trips" in r},
+        start,
+    )
+    feet = figures["footbots"]
+    await team.report("done", t_1=figures["t_1"], t_a=figures["t_a"], trips=figures["trips"])
+    return {
+        **figures,
+        "start": start,
+        "duration": duration,
+        "wall_s": wall,
+        "footbot_s_per_wall_s": feet * duration / wall if wall > 0 else None,
+        "me": everyone[team.me],
+    }
+
+
+async def _start(hw: EyeBotHardware | FootBotHardware, team: RunTeam) -> float:
+    """Agree with the team on the simulated time at which everyone starts: a little after the
+    latest time any member has seen (one ``and`` step); tick until then."""
+
+    async def now() -> float:
+        return hw.clock.now()
+
+    latest = max(float(t) for t in (await team.distributed_and(now)).values())
+    start = latest + START_LEAD * hw.clock.tick_period
+    while hw.clock.now() < start - 1e-9:
+        await hw.clock.tick()
+    return hw.clock.now()
+
+
+def travel_times(trips: Mapping[str, list[list[Any]]], start: float) -> dict[str, Any]:
+    """The paper's figures from every foot-bot's trips (``[goal, start, end]`` each): ``t_1``
+    (the first arrival at the target, seconds after ``start``), ``t_a`` (the mean trip after
+    each foot-bot's first; the first one starts in exploration), ``t_a_all`` (every trip),
+    ``trips`` and ``footbots``; None where there is no trip to count."""
+    arrivals = [end for bot in trips.values() for goal, _, end in bot if goal == Goal.TARGET.value]
+    later = [end - begin for bot in trips.values() for _, begin, end in bot[1:]]
+    every = [end - begin for bot in trips.values() for _, begin, end in bot]
+    return {
+        "t_1": min(arrivals) - start if arrivals else None,
+        "t_a": float(np.mean(later)) if later else None,
+        "t_a_all": float(np.mean(every)) if every else None,
+        "trips": len(every),
+        "footbots": len(trips),
+    }
