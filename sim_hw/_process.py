@@ -98,7 +98,10 @@ def add_world_arguments(
 
 def ready_line(name: str, source: str, team: Any, config: Any) -> str:
     """What a world process prints once it serves: where it is and how robots join it."""
-    where = ",".join(config.listen or config.connect)
+    # A listen endpoint on port 0 has a free port that zenoh does not tell: name the endpoints
+    # this process connects to instead (the router, say), which reach it as well.
+    known = [e for e in config.listen if not e.endswith(":0")] or list(config.connect)
+    where = ",".join(known)
     join = f"MOVER_TEAM={team.name} MOVER_CONNECT={where}" if where else f"MOVER_TEAM={team.name}"
     return (
         f"READY {name}: serving {source} in team {team.name!r}; robots join with {join} "
