@@ -21,10 +21,7 @@ from ._exceptions import (
     RemoteError,
     WireError,
 )
-
-if TYPE_CHECKING:
-    from ._node import Node
-
+from ._session import FaultLog
 from ._steps import (
     _STEP_MEMORY,
     CALL_TIMEOUT,
@@ -38,6 +35,9 @@ from ._steps import (
     _Step,
     wait_reachable,
 )
+
+if TYPE_CHECKING:
+    from ._node import Node
 
 log = logging.getLogger("mover.tasks")
 
@@ -54,6 +54,7 @@ class Collectives:
         # this member's OR operations, by step, once reached (None: not timed), for or_passed
         self._local: dict[tuple[str, int], asyncio.Future[_LocalOp | None]] = {}
         self._ended: deque[str] = deque(maxlen=_STEP_MEMORY)  # runs that ended here
+        self._faults = FaultLog(node.name)
         self._announcements = node.subscribe(DECIDED_TOPIC)
         self._listener = asyncio.get_running_loop().create_task(self._listen())
         node.export(self.or_join, "mover.or_join")
@@ -120,7 +121,7 @@ class Collectives:
                     raise WireError("not [run, step, decision]")
                 decision = Decision.from_wire(data[2])
             except WireError as exc:
-                self.node._refusal_log.warn(message.sender, f"dropped a decision: {exc}")
+                self._faults.warn(message.sender, f"dropped a decision: {exc}")
                 continue
             future = self.heard(data[0], data[1])
             if not future.done():

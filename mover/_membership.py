@@ -25,7 +25,7 @@ from . import _keys
 from ._exceptions import WireError
 
 if TYPE_CHECKING:
-    from ._node import Node
+    from ._session import SessionState
 
 log = logging.getLogger("mover.team")
 
@@ -58,8 +58,8 @@ class MemberEvent:
 class Membership:
     """The live view of a team's members, as seen by one node."""
 
-    def __init__(self, node: Node) -> None:
-        self._node = node
+    def __init__(self, state: SessionState) -> None:
+        self._state = state
         self._members: dict[str, MemberInfo] = {}
         self._tokens: set[str] = set()
         self._listeners: list[asyncio.Queue[MemberEvent]] = []
@@ -127,7 +127,7 @@ class Membership:
         """
         loop = asyncio.get_running_loop()
         if grace is None:
-            grace = self._node.config.leave_grace
+            grace = self._state.config.leave_grace
 
         def later(name: str) -> None:
             if name not in self._members:
@@ -148,14 +148,14 @@ class Membership:
         fresh = info.name not in self._members
         self._members[info.name] = info
         if fresh:
-            log.info("%s: %s joined (%s)", self._node.name, info.name, info.kind)
+            log.info("%s: %s joined (%s)", self._state.name, info.name, info.kind)
             self._emit(MemberEvent("join", info.name, info))
 
     def _leave(self, name: str) -> None:
         info = self._members.pop(name, None)
         if info is None:
             return
-        log.info("%s: %s left", self._node.name, name)
+        log.info("%s: %s left", self._state.name, name)
         self._emit(MemberEvent("leave", name, info))
         for callback in list(self._on_leave):
             try:
@@ -169,8 +169,8 @@ class Membership:
             queue.put_nowait(event)
 
     def self_info(self) -> MemberInfo:
-        node = self._node
-        return MemberInfo(node.name, node.kind, node.started, os.getpid(), os.uname().nodename)
+        state = self._state
+        return MemberInfo(state.name, state.kind, state.started, os.getpid(), os.uname().nodename)
 
     def on_token(self, sample: Any) -> None:
         """A liveliness token appeared or went away (runs on the loop)."""
@@ -181,16 +181,15 @@ class Membership:
             self._leave(name)
             return
         self._tokens.add(name)
-        if name == self._node.name:
-            if not self._node.observer:
+        if name == self._state.name:
+            if not self._state.observer:
                 self._join(self.self_info())
             return
         self._ask_hello(name)
 
     def _ask_hello(self, name: str, attempt: int = 0) -> None:
         """Verify the holder of ``name``'s token; it joins once its hello answers."""
-        node = self._node
-        if node._session is None or name not in self._tokens or name in self._members:
+        if not self._state.is_open or name not in self._tokens or name in self._members:
             return
         self._hello(name, attempt=attempt, join=True)
 
@@ -198,16 +197,16 @@ class Membership:
         """``name``'s session, verified with a fresh challenge (asked now unless known, or if
         ``fresh``); None if no member of that name answers within ``timeout``. Works for any
         node of the team, members and observers alike (no liveliness token needed)."""
-        node = self._node
+        state = self._state
         if not fresh:
-            epoch = node._sessions.verified(name)
+            epoch = state.peers.verified(name)
             if epoch is not None:
                 return epoch
         future: asyncio.Future[bytes | None] = asyncio.get_running_loop().create_future()
         waiting = self._verifying.setdefault(name, [])
         waiting.append(future)
-        if len(waiting) == 1 and node._session is not None:
-            self._hello(name, attempt=node.config.hello_retries, join=False)
+        if len(waiting) == 1 and state.is_open:
+            self._hello(name, attempt=state.config.hello_retries, join=False)
         try:
             async with asyncio.timeout(timeout):
                 return await asyncio.shield(future)
@@ -222,16 +221,16 @@ class Membership:
     def verify_soon(self, name: str) -> None:
         """Ask ``name`` for its hello now, unless that was asked within the last second."""
         now = time.monotonic()
-        if now - self._asked.get(name, -1e9) < 1.0 or self._node._session is None:
+        if now - self._asked.get(name, -1e9) < 1.0 or not self._state.is_open:
             return
         self._asked[name] = now
         while len(self._asked) > 4096:
             del self._asked[next(iter(self._asked))]
-        self._hello(name, attempt=self._node.config.hello_retries, join=False)
+        self._hello(name, attempt=self._state.config.hello_retries, join=False)
 
     def _open_hello(self, frame: bytes, name: str, challenge: bytes) -> tuple[Any, MemberInfo]:
         """The envelope and member info of an authentic hello answering ``challenge``."""
-        env = self._node._opener.open(frame)
+        env = self._state.opener.open(frame)
         p = env.payload
         try:
             if env.kind != "hello" or env.sender != name or p.get("challenge") != challenge:
@@ -245,7 +244,7 @@ class Membership:
 
     async def holders(self, name: str, timeout: float = 1.0) -> list[MemberInfo]:
         """Other live nodes of the team that answer to ``name`` (this node excluded)."""
-        node = self._node
+        state = self._state
         loop = asyncio.get_running_loop()
         challenge = os.urandom(16)
         found: list[MemberInfo] = []
@@ -258,21 +257,14 @@ class Membership:
                 env, info = self._open_hello(reply.ok.payload.to_bytes(), name, challenge)
             except WireError:
                 return
-            if env.epoch != node._sealer.epoch:
+            if env.epoch != state.sealer.epoch:
                 found.append(info)
 
         def on_done(_: Any) -> None:
             if not finished.done():
                 finished.set_result(None)
 
-        node._session.get(
-            _keys.hello(node.team_name, name),
-            node._portal.callback(on_reply, on_done),
-            payload=challenge,
-            target=zenoh.QueryTarget.ALL,
-            consolidation=zenoh.ConsolidationMode.NONE,
-            timeout=timeout,
-        )
+        state.ask_all(_keys.hello(state.team, name), challenge, on_reply, on_done, timeout=timeout)
         with contextlib.suppress(TimeoutError):
             await asyncio.wait_for(asyncio.shield(finished), timeout + 0.5)
         return found
@@ -283,34 +275,35 @@ class Membership:
                 future.set_result(epoch)
 
     def _hello(self, name: str, *, attempt: int, join: bool) -> None:
-        node = self._node
+        state = self._state
         challenge = os.urandom(16)
-        state: dict[str, Any] = {"ok": False}
+        answered = False
 
         def on_reply(reply: Any) -> None:
-            if reply.ok is None or state["ok"]:
+            nonlocal answered
+            if reply.ok is None or answered:
                 return
             try:
                 env, info = self._open_hello(reply.ok.payload.to_bytes(), name, challenge)
             except WireError as exc:
-                node._refusal_log.warn(name, f"hello from {name!r} refused: {exc}")
+                state.faults.warn(name, f"hello from {name!r} refused: {exc}")
                 return
-            state["ok"] = True
+            answered = True
             # Its session, as of this fresh answer: what it broadcast before does not count.
-            node._sessions.learn(name, env.epoch, env.counter)
+            state.peers.learn(name, env.epoch, env.counter)
             self._verified(name, env.epoch)
             if join and name in self._tokens:
                 self._join(info)
 
         def on_done(_: Any) -> None:
-            if state["ok"]:
+            if answered:
                 return
             if not join:
                 self._verified(name, None)
                 return
             if name not in self._tokens:
                 return
-            if attempt < node.config.hello_retries:
+            if attempt < state.config.hello_retries:
                 # No authentic answer (an overloaded machine, a link still coming up, or only
                 # a stranger's answer on the member's key): ask again later.
                 delay = min(0.2 * 2**attempt, 3.0)
@@ -318,27 +311,26 @@ class Membership:
             else:
                 log.warning(
                     "%s: %r holds a liveliness token but is not a verified member of team %r",
-                    node.name,
+                    state.name,
                     name,
-                    node.team_name,
+                    state.team,
                 )
 
-        node._session.get(
-            _keys.hello(node.team_name, name),
-            node._portal.callback(on_reply, on_done),
-            payload=challenge,
-            target=zenoh.QueryTarget.ALL,  # a stranger's queryable cannot take it (see _rpc)
-            consolidation=zenoh.ConsolidationMode.NONE,
-            timeout=node.config.hello_timeout,
+        state.ask_all(
+            _keys.hello(state.team, name),
+            challenge,
+            on_reply,
+            on_done,
+            timeout=state.config.hello_timeout,
         )
 
     def on_hello_query(self, query: Any) -> None:
         """Answer a hello request with a signed hello (runs on the loop)."""
-        node = self._node
+        state = self._state
         with query:
             challenge = query.payload.to_bytes()[:32] if query.payload is not None else b""
             info = self.self_info()
-            frame = node._sealer.seal(
+            frame = state.sealer.seal(
                 "hello",
                 {
                     "challenge": challenge,
@@ -348,4 +340,4 @@ class Membership:
                     "host": info.host,
                 },
             )
-            query.reply(_keys.hello(node.team_name, node.name), frame)
+            query.reply(_keys.hello(state.team, state.name), frame)

@@ -15,7 +15,6 @@ import asyncio
 import inspect
 import logging
 import time
-from collections import Counter
 from collections.abc import Callable
 from typing import Any, Literal
 
@@ -24,41 +23,14 @@ import zenoh
 from . import _keys
 from ._bridge import Portal, run_blocking, sample_size
 from ._config import NodeConfig, Team
-from ._exceptions import MoverError, NameTaken, PayloadTooLarge, WireError
+from ._exceptions import MoverError, NameTaken
 from ._membership import Membership
-from ._radio import Locator, Message, Neighbour, Radio, RadioModel, Subscription
+from ._radio import Locator, Message, Neighbour, PubSub, Radio, RadioModel, Subscription
 from ._rpc import RpcClient, RpcServer, procedures_of
-from ._wire import DEFAULT_MAX_SIZE, Opener, Sealer, Sessions, SessionUnknown, pack
+from ._session import SessionState
+from ._wire import DEFAULT_MAX_SIZE, Opener, Sealer
 
 log = logging.getLogger("mover.node")
-
-
-def _array_header(n: int) -> bytes:
-    """The msgpack header of an array of ``n`` elements."""
-    if n < 16:
-        return bytes([0x90 | n])
-    if n < 65536:
-        return b"\xdc" + n.to_bytes(2, "big")
-    return b"\xdd" + n.to_bytes(4, "big")
-
-
-class _RateLimitedLog:
-    """Logs refusals, at most ``burst`` per source per minute (a flood must not flood logs)."""
-
-    def __init__(self, owner: str, burst: int = 20) -> None:
-        self.owner = owner
-        self.burst = burst
-        self._counts: Counter[str] = Counter()
-        self._window = 0.0
-
-    def warn(self, source: str, message: str) -> None:
-        now = time.monotonic()
-        if now - self._window > 60.0:
-            self._counts.clear()
-            self._window = now
-        self._counts[source] += 1
-        if self._counts[source] <= self.burst:
-            log.warning("%s: %s", self.owner, message)
 
 
 class Node:
@@ -92,23 +64,28 @@ class Node:
         self.observer = observer
         self.unique = unique
         self.started = time.time()
-        self.stats: Counter[str] = Counter()
+        # What the parts below share, and all they see of this node.
+        self._state = SessionState(
+            name=self.name,
+            team=team.name,
+            sealer=Sealer(team.name, name, team.key, max_size=max_size),
+            opener=Opener(team.name, team.key, max_size=max_size),
+            kind=kind,
+            config=self.config,
+            observer=observer,
+            on_refused=on_refused,
+            started=self.started,
+        )
+        self.stats = self._state.stats
+        self._sealer = self._state.sealer  # for tests that forge frames as this node
+        self._sessions = self._state.peers
         self.radio = Radio(locator, radio)
-        self._sealer = Sealer(team.name, name, team.key, max_size=max_size)
-        self._opener = Opener(team.name, team.key, max_size=max_size)
-        self._sessions = Sessions()
-        self._refusal_log = _RateLimitedLog(name)
-        self._server = RpcServer(self)
+        self.team: Membership = Membership(self._state)
+        self._server = RpcServer(self._state)
         self._server.export(self.procedures, "mover.procedures")
-        self._client = RpcClient(self)
-        self._subs: dict[str, tuple[Any, list[Subscription]]] = {}
-        self._publishers: dict[tuple[str, bool, bool], Any] = {}
-        self._outbox: dict[tuple[str, bool, bool], list[bytes]] = {}
-        self._flush_scheduled = False
+        self._client = RpcClient(self._state, self.team)
+        self._pubsub = PubSub(self._state, self.radio, self.team)
         self._declared: list[Any] = []
-        self._session: Any = None
-        self._portal: Portal = None  # type: ignore[assignment]  # set by open()
-        self.team: Membership = Membership(self)
 
     @property
     def team_name(self) -> str:
@@ -119,13 +96,13 @@ class Node:
 
     async def open(self) -> Node:
         """Open the zenoh session and join the team."""
-        if self._session is not None:
+        if self._state.is_open:
             raise MoverError("node is already open")
-        loop = asyncio.get_running_loop()
-        self._portal = Portal(loop)
+        portal = Portal(asyncio.get_running_loop())
         conf = self.config.to_zenoh()
-        self._session = await run_blocking(lambda: zenoh.open(conf))
-        team, portal, session = self.team_config.name, self._portal, self._session
+        session = await run_blocking(lambda: zenoh.open(conf))
+        self._state.opened(session, portal)
+        team = self.team_config.name
         self.team.on_leave(self._member_left)
         self.team.on_gone(self._server.cancel)  # a caller gone for good: stop its calls
         self._declared += [
@@ -135,7 +112,7 @@ class Node:
                 complete=True,
             ),
             session.declare_subscriber(
-                _keys.ctl(team, self.name), portal.callback(self._on_ctl, size=sample_size)
+                _keys.ctl(team, self.name), portal.callback(self._server.on_ctl, size=sample_size)
             ),
             session.declare_queryable(
                 _keys.hello(team, self.name), portal.callback(self.team.on_hello_query)
@@ -182,20 +159,13 @@ class Node:
 
     async def close(self) -> None:
         """Leave the team: cancel served calls, fail pending ones, close the session."""
-        if self._session is None:
+        if not self._state.is_open:
             return
-        self._flush()
-        tasks = list(self._server.tasks.values())
-        for task in tasks:
-            task.cancel()
-        await asyncio.gather(*tasks, return_exceptions=True)
+        self._pubsub.flush()
+        await self._server.close()
         self._client.close()
-        for _, subs in list(self._subs.values()):
-            for sub in list(subs):
-                sub.close()
-        session, self._session = self._session, None
-        assert self._portal is not None
-        self._portal.close()
+        self._pubsub.close()
+        session = self._state.closed()
         await run_blocking(lambda: self._close_session(session))
 
     def _close_session(self, session: Any) -> None:
@@ -205,7 +175,7 @@ class Node:
             except Exception as exc:
                 log.debug("undeclare failed: %s", exc)
         self._declared.clear()
-        self._publishers.clear()
+        self._pubsub.closed()
         session.close()
 
     async def __aenter__(self) -> Node:
@@ -216,15 +186,12 @@ class Node:
 
     def connected(self) -> bool:
         """Whether this node has a link to any other zenoh node (peer or router) now."""
-        if self._session is None:
-            return False
-        info = self._session.info
-        return bool(list(info.routers_zid()) or list(info.peers_zid()))
+        return self._state.connected()
 
     @property
     def zenoh_session(self) -> Any:
         """The underlying zenoh session (for tools and benchmarks)."""
-        return self._session
+        return self._state.zenoh
 
     # -- procedures -----------------------------------------------------------------------------
 
@@ -302,113 +269,12 @@ class Node:
         this node had when it was made. Raises PayloadTooLarge at once for oversized data.
         """
         self._require_open()
-        if range is not None and range < 0:
-            raise ValueError("range must be >= 0")
-        where = self.radio.position()
-        item = pack([data, list(where) if where else None, range])
-        if len(item) > self._sealer.max_size // 2:
-            raise PayloadTooLarge(f"broadcast of {len(item)} bytes is over the limit")
-        box = self._outbox.get((topic, reliable, express))
-        if box is None:
-            _keys.check_topic(topic)
-            box = self._outbox[(topic, reliable, express)] = []
-        box.append(item)
-        if not self._flush_scheduled:
-            self._flush_scheduled = True
-            asyncio.get_running_loop().call_soon(self._flush)
-
-    def _flush(self) -> None:
-        self._flush_scheduled = False
-        if self._session is None:
-            return
-        outbox, self._outbox = self._outbox, {}
-        limit = self._sealer.max_size // 2
-        for (topic, reliable, express), items in outbox.items():
-            pub = self._publisher(topic, reliable, express)
-            start = 0
-            while start < len(items):
-                end, size = start, 0
-                while end < len(items) and (end == start or size + len(items[end]) < limit):
-                    size += len(items[end])
-                    end += 1
-                payload = (
-                    b"\x92" + pack(topic) + _array_header(end - start) + b"".join(items[start:end])
-                )
-                pub.put(self._sealer.seal_packed("bc", payload))
-                self.stats["sent.bc_frames"] += 1
-                start = end
-            self.stats["sent.bc"] += len(items)
-
-    def _publisher(self, topic: str, reliable: bool, express: bool) -> Any:
-        pub = self._publishers.get((topic, reliable, express))
-        if pub is None:
-            congestion = zenoh.CongestionControl.BLOCK if reliable else zenoh.CongestionControl.DROP
-            pub = self._session.declare_publisher(
-                _keys.broadcast(self.team_name, topic),
-                congestion_control=congestion,
-                express=express,
-            )
-            self._publishers[(topic, reliable, express)] = pub
-        return pub
+        self._pubsub.broadcast(topic, data, range, reliable, express)
 
     def subscribe(self, topic: str, *, maxlen: int = 100_000) -> Subscription:
         """Messages on ``topic`` that reach this node, as an async iterator."""
         self._require_open()
-        _keys.check_topic(topic)
-        sub = Subscription(topic, maxlen, self._unsubscribe)
-        entry = self._subs.get(topic)
-        if entry is None:
-            assert self._portal is not None
-            zsub = self._session.declare_subscriber(
-                _keys.broadcast(self.team_config.name, topic),
-                self._portal.callback(self._on_bc, droppable=True, size=sample_size),
-            )
-            entry = (zsub, [])
-            self._subs[topic] = entry
-        entry[1].append(sub)
-        return sub
-
-    def _unsubscribe(self, sub: Subscription) -> None:
-        entry = self._subs.get(sub.topic)
-        if entry is None or sub not in entry[1]:
-            return
-        entry[1].remove(sub)
-        if not entry[1]:
-            del self._subs[sub.topic]
-            if self._session is not None:
-                entry[0].undeclare()
-
-    def _on_bc(self, sample: Any) -> None:
-        try:
-            env = self._opener.open(sample.payload.to_bytes())
-            if env.sender == self.name:
-                return
-            payload = env.payload
-            if env.kind != "bc" or not isinstance(payload, list) or len(payload) != 2:
-                raise WireError("not a broadcast envelope")
-            topic, items = payload
-            if not isinstance(topic, str) or not isinstance(items, list):
-                raise WireError("not a broadcast envelope")
-            self._sessions.admit(env, self.name, self._sealer.epoch)
-        except SessionUnknown as exc:
-            # a member this node has not verified yet (it just joined, or we did): ask for its
-            # hello; what it sent before that does not count
-            self.stats["refused.unverified"] += 1
-            self.team.verify_soon(exc.envelope.sender)
-            return
-        except WireError as exc:
-            self.stats["refused"] += 1
-            self._refusal_log.warn("bc", f"dropped a broadcast on {sample.key_expr}: {exc}")
-            return
-        entry = self._subs.get(topic)
-        if entry is None:
-            return
-        messages = self.radio.receive_all(env.sender, topic, items, env.timestamp)
-        if messages:
-            for sub in entry[1]:
-                sub._put(messages)
-        delivered = len(messages)
-        self.stats["recv.bc"] += delivered
+        return self._pubsub.subscribe(topic, maxlen)
 
     def neighbours(self, max_age: float = 1.0) -> dict[str, Neighbour]:
         """Members heard by broadcast within the last ``max_age`` seconds, with range/bearing."""
@@ -417,19 +283,7 @@ class Node:
     # -- internals ------------------------------------------------------------------------------
 
     def _require_open(self) -> None:
-        if self._session is None:
-            raise MoverError("the node is not open (use 'async with Node(...)')")
-
-    def _on_ctl(self, sample: Any) -> None:
-        try:
-            env = self._opener.open(sample.payload.to_bytes())
-            self._sessions.admit(env, self.name, self._sealer.epoch)
-        except WireError as exc:
-            self.stats["refused"] += 1
-            self._refusal_log.warn("ctl", f"dropped a control message: {exc}")
-            return
-        if env.kind == "cancel" and type(env.payload) is int:
-            self._server.cancel(env.sender, env.payload)
+        self._state.require_open()
 
     def _member_left(self, name: str) -> None:
         self._client.robot_left(name)

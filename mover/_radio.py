@@ -9,6 +9,10 @@ ARGoS's range-and-bearing sensor and Buzz's ``neighbors`` give. An optional :cla
 adds a per-link drop probability and Gaussian range and bearing noise from a seeded generator.
 ``range=None`` is plain team-wide pub/sub (distance and bearing are still filled in when both
 ends have positions).
+
+:class:`PubSub` is a node's sending and receiving side: broadcasts made in one turn of the event
+loop leave together, one sealed frame per topic (framing: :func:`mover._wire.broadcast_frames`),
+and each received frame is opened, judged fresh and fanned out to the topic's subscriptions.
 """
 
 from __future__ import annotations
@@ -20,7 +24,18 @@ import time
 from collections import deque
 from collections.abc import AsyncIterator
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
+
+import zenoh
+
+from . import _keys
+from ._bridge import sample_size
+from ._exceptions import PayloadTooLarge, WireError
+from ._wire import SessionUnknown, broadcast_frames, pack, read_broadcast
+
+if TYPE_CHECKING:
+    from ._membership import Membership
+    from ._session import SessionState
 
 
 class Locator(Protocol):
@@ -222,3 +237,126 @@ class Radio:
 
     def forget(self, name: str) -> None:
         self._neighbours.pop(name, None)
+
+
+class PubSub:
+    """A node's broadcasts and subscriptions (see the module)."""
+
+    def __init__(self, state: SessionState, radio: Radio, team: Membership) -> None:
+        self.state = state
+        self.radio = radio
+        self.team = team
+        self._subs: dict[str, tuple[Any, list[Subscription]]] = {}
+        self._publishers: dict[tuple[str, bool, bool], Any] = {}
+        self._outbox: dict[tuple[str, bool, bool], list[bytes]] = {}
+        self._flush_scheduled = False
+
+    def broadcast(
+        self, topic: str, data: Any, range: float | None, reliable: bool, express: bool
+    ) -> None:
+        """Queue ``data`` on ``topic`` (see ``Node.broadcast_nowait``); it leaves at the end of
+        this turn of the loop."""
+        if range is not None and range < 0:
+            raise ValueError("range must be >= 0")
+        where = self.radio.position()
+        item = pack([data, list(where) if where else None, range])
+        if len(item) > self.state.sealer.max_size // 2:
+            raise PayloadTooLarge(f"broadcast of {len(item)} bytes is over the limit")
+        box = self._outbox.get((topic, reliable, express))
+        if box is None:
+            _keys.check_topic(topic)
+            box = self._outbox[(topic, reliable, express)] = []
+        box.append(item)
+        if not self._flush_scheduled:
+            self._flush_scheduled = True
+            asyncio.get_running_loop().call_soon(self.flush)
+
+    def flush(self) -> None:
+        """Send what was queued (at the end of the turn, or as the node closes)."""
+        self._flush_scheduled = False
+        state = self.state
+        if not state.is_open:
+            return
+        outbox, self._outbox = self._outbox, {}
+        for (topic, reliable, express), items in outbox.items():
+            pub = self._publisher(topic, reliable, express)
+            for frame in broadcast_frames(state.sealer, topic, items):
+                pub.put(frame)
+                state.stats["sent.bc_frames"] += 1
+            state.stats["sent.bc"] += len(items)
+
+    def _publisher(self, topic: str, reliable: bool, express: bool) -> Any:
+        pub = self._publishers.get((topic, reliable, express))
+        if pub is None:
+            congestion = zenoh.CongestionControl.BLOCK if reliable else zenoh.CongestionControl.DROP
+            pub = self.state.zenoh.declare_publisher(
+                _keys.broadcast(self.state.team, topic),
+                congestion_control=congestion,
+                express=express,
+            )
+            self._publishers[(topic, reliable, express)] = pub
+        return pub
+
+    def subscribe(self, topic: str, maxlen: int) -> Subscription:
+        """A new subscription to ``topic`` (one zenoh subscriber per topic, shared)."""
+        _keys.check_topic(topic)
+        sub = Subscription(topic, maxlen, self._unsubscribe)
+        entry = self._subs.get(topic)
+        if entry is None:
+            zsub = self.state.zenoh.declare_subscriber(
+                _keys.broadcast(self.state.team, topic),
+                self.state.door().callback(self.on_frame, droppable=True, size=sample_size),
+            )
+            entry = (zsub, [])
+            self._subs[topic] = entry
+        entry[1].append(sub)
+        return sub
+
+    def _unsubscribe(self, sub: Subscription) -> None:
+        entry = self._subs.get(sub.topic)
+        if entry is None or sub not in entry[1]:
+            return
+        entry[1].remove(sub)
+        if not entry[1]:
+            del self._subs[sub.topic]
+            if self.state.is_open:
+                entry[0].undeclare()
+
+    def on_frame(self, sample: Any) -> None:
+        """A broadcast frame arrived (on the loop)."""
+        state = self.state
+        try:
+            env = state.opener.open(sample.payload.to_bytes())
+            if env.sender == state.name:
+                return
+            topic, items = read_broadcast(env)
+            state.peers.admit(env, state.name, state.sealer.epoch)
+        except SessionUnknown as exc:
+            # a member this node has not verified yet (it just joined, or we did): ask for its
+            # hello; what it sent before that does not count
+            state.stats["refused.unverified"] += 1
+            self.team.verify_soon(exc.envelope.sender)
+            return
+        except WireError as exc:
+            state.stats["refused"] += 1
+            state.faults.warn("bc", f"dropped a broadcast on {sample.key_expr}: {exc}")
+            return
+        entry = self._subs.get(topic)
+        if entry is None:
+            return
+        messages = self.radio.receive_all(env.sender, topic, items, env.timestamp)
+        if messages:
+            for sub in entry[1]:
+                sub._put(messages)
+        state.stats["recv.bc"] += len(messages)
+
+    def close(self) -> None:
+        """Send what is queued, then close every subscription."""
+        self.flush()
+        for _, subs in list(self._subs.values()):
+            for sub in list(subs):
+                sub.close()
+
+    def closed(self) -> None:
+        """The session is gone: forget its publishers."""
+        self._publishers.clear()

@@ -18,8 +18,6 @@ from dataclasses import dataclass, field
 from functools import partial
 from typing import TYPE_CHECKING, Any, TypeVar
 
-import zenoh
-
 from . import _keys
 from ._exceptions import (
     CALL_ERRORS,
@@ -36,7 +34,8 @@ from ._signature import Signature
 from ._wire import Envelope, EnvelopeRefused, SessionChanged, read_refusal, refusal
 
 if TYPE_CHECKING:
-    from ._node import Node
+    from ._membership import Membership
+    from ._session import SessionState
 
 log = logging.getLogger("mover.rpc")
 
@@ -83,8 +82,8 @@ class Exported:
 class RpcServer:
     """Serves the calls addressed to one node."""
 
-    def __init__(self, node: Node) -> None:
-        self.node = node
+    def __init__(self, state: SessionState) -> None:
+        self.state = state
         self.exports: dict[str, Exported] = {}
         self.tasks: dict[tuple[str, int], asyncio.Task[None]] = {}
         self._asked: dict[tuple[str, int], bool] = {}  # calls their caller asked to cancel
@@ -96,26 +95,26 @@ class RpcServer:
 
     def on_query(self, query: Any) -> None:
         """An incoming call (runs on the loop)."""
-        node = self.node
+        state = self.state
         frame = query.payload.to_bytes() if query.payload is not None else b""
         try:
-            env = node._opener.open(frame)
+            env = state.opener.open(frame)
             if env.kind != "call":
                 raise EnvelopeRefused(f"a {env.kind!r} envelope is not a call", env)
-            node._sessions.admit(env, node.name, node._sealer.epoch)
+            state.peers.admit(env, state.name, state.sealer.epoch)
         except WireError as exc:
-            node.stats["refused"] += 1
-            node._refusal_log.warn("rpc", f"refused a call: {exc}")
+            state.stats["refused"] += 1
+            state.faults.warn("rpc", f"refused a call: {exc}")
             if isinstance(exc, EnvelopeRefused) and exc.envelope.kind == "call":
                 # authentic but refused: a sealed answer its sender can believe
                 kind = "SessionChanged" if isinstance(exc, SessionChanged) else "Refused"
                 self._send(query, exc.envelope, _err(kind, str(exc)))
                 return
             with query:
-                if node.on_refused == "reply":
-                    query.reply(_keys.rpc(node.team_name, node.name), refusal(str(exc)))
+                if state.on_refused == "reply":
+                    query.reply(_keys.rpc(state.team, state.name), refusal(str(exc)))
             return
-        node.stats["recv.call"] += 1
+        state.stats["recv.call"] += 1
         prepared = self._prepare(env)
         if isinstance(prepared, dict):
             self._send(query, env, prepared)
@@ -171,17 +170,17 @@ class RpcServer:
         name, args, kwargs = payload
         exported = self.exports.get(name)
         if exported is None:
-            log.warning("%s: %r called unknown procedure %r", self.node.name, env.sender, name)
+            log.warning("%s: %r called unknown procedure %r", self.state.name, env.sender, name)
             known = ", ".join(sorted(self.exports)) or "none"
             return _err(
                 "UnknownProcedure",
-                f"{self.node.name!r} exports no procedure {name!r} (exported: {known})",
+                f"{self.state.name!r} exports no procedure {name!r} (exported: {known})",
             )
         try:
             args, kwargs = exported.signature.bind(args, kwargs)
         except TypeError as exc:
             log.warning(
-                "%s: bad arguments from %r to %r: %s", self.node.name, env.sender, name, exc
+                "%s: bad arguments from %r to %r: %s", self.state.name, env.sender, name, exc
             )
             return _err("BadArguments", f"{name}{exported.signature.describe()}: {exc}")
         return exported, args, kwargs
@@ -196,25 +195,29 @@ class RpcServer:
 
     def _failure(self, exported: Exported, exc: Exception) -> dict[str, Any]:
         log.info(
-            "%s: procedure %r raised %s: %s", self.node.name, exported.name, type(exc).__name__, exc
+            "%s: procedure %r raised %s: %s",
+            self.state.name,
+            exported.name,
+            type(exc).__name__,
+            exc,
         )
         return _err(type(exc).__name__, str(exc))
 
     def _send(self, query: Any, env: Envelope, reply: dict[str, Any]) -> None:
-        node = self.node
+        state = self.state
         with query:
             try:
-                frame = node._sealer.seal(
+                frame = state.sealer.seal(
                     "reply", reply, env.call_id, to=env.sender, to_epoch=env.epoch
                 )
             except WireError as exc:
                 failed = _err("WireError", f"cannot send the result: {exc}")
-                frame = node._sealer.seal(
+                frame = state.sealer.seal(
                     "reply", failed, env.call_id, to=env.sender, to_epoch=env.epoch
                 )
             try:
-                query.reply(_keys.rpc(node.team_name, node.name), frame, express=True)
-                node.stats["sent.reply"] += 1
+                query.reply(_keys.rpc(state.team, state.name), frame, express=True)
+                state.stats["sent.reply"] += 1
             except Exception as exc:  # the session is closing, or the caller is gone
                 log.debug("could not reply to %r: %s", env.sender, exc)
 
@@ -224,6 +227,26 @@ class RpcServer:
             if who == caller and (call_id is None or cid == call_id):
                 self._asked[(who, cid)] = True
                 task.cancel()
+
+    def on_ctl(self, sample: Any) -> None:
+        """A control message (a caller's cancel) on ``mover/<team>/ctl/<me>`` (on the loop)."""
+        state = self.state
+        try:
+            env = state.opener.open(sample.payload.to_bytes())
+            state.peers.admit(env, state.name, state.sealer.epoch)
+        except WireError as exc:
+            state.stats["refused"] += 1
+            state.faults.warn("ctl", f"dropped a control message: {exc}")
+            return
+        if env.kind == "cancel" and type(env.payload) is int:
+            self.cancel(env.sender, env.payload)
+
+    async def close(self) -> None:
+        """Cancel every call being served, and wait for them to end."""
+        tasks = list(self.tasks.values())
+        for task in tasks:
+            task.cancel()
+        await asyncio.gather(*tasks, return_exceptions=True)
 
 
 def _err(kind: str, message: str) -> dict[str, Any]:
@@ -242,8 +265,9 @@ class _Pending:
 class RpcClient:
     """Makes calls from one node and tracks the ones in flight."""
 
-    def __init__(self, node: Node) -> None:
-        self.node = node
+    def __init__(self, state: SessionState, team: Membership) -> None:
+        self.state = state
+        self.team = team
         self.pending: dict[int, _Pending] = {}
         self._next_id = 0
 
@@ -271,15 +295,15 @@ class RpcClient:
         self, robot: str, procedure: str, timeout: float | None, *, fresh: bool
     ) -> bytes:
         """The callee's session, verified with a challenge (asked now if not known yet)."""
-        node = self.node
-        if robot == node.name:
-            return node._sealer.epoch
-        epoch = None if fresh else node._sessions.verified(robot)
+        state = self.state
+        if robot == state.name:
+            return state.sealer.epoch
+        epoch = None if fresh else state.peers.verified(robot)
         if epoch is None:
-            epoch = await node.team.verify(robot, timeout=min(timeout or 5.0, 5.0), fresh=fresh)
+            epoch = await self.team.verify(robot, timeout=min(timeout or 5.0, 5.0), fresh=fresh)
         if epoch is None:
             raise UnknownRobot(
-                f"no member {robot!r} of team {node.team_name!r} answers",
+                f"no member {robot!r} of team {state.team!r} answers",
                 robot=robot,
                 procedure=procedure,
             )
@@ -295,30 +319,25 @@ class RpcClient:
         timeout: float | None,
         left: float | None,
     ) -> Any:
-        node = self.node
+        state = self.state
         self._next_id += 1
         call_id = self._next_id
         payload = [procedure, list(args), kwargs]
-        frame = node._sealer.seal("call", payload, call_id, to=robot, to_epoch=epoch)
+        frame = state.sealer.seal("call", payload, call_id, to=robot, to_epoch=epoch)
         future: asyncio.Future[Any] = asyncio.get_running_loop().create_future()
-        member = robot in node.team
+        member = robot in self.team
         self.pending[call_id] = _Pending(robot, procedure, future, member)
         try:
-            # Every queryable on the key gets the call (target ALL): one that a stranger
-            # declares there, "complete" or not, cannot take it away from the member, and only
-            # the member's authentic reply counts (see _on_reply).
-            node._session.get(
-                _keys.rpc(node.team_name, robot),
-                node._portal.callback(
-                    partial(self._on_reply, call_id), partial(self._on_done, call_id)
-                ),
-                payload=frame,
-                target=zenoh.QueryTarget.ALL,
-                consolidation=zenoh.ConsolidationMode.NONE,
+            # Only the member's authentic reply counts (see _on_reply).
+            state.ask_all(
+                _keys.rpc(state.team, robot),
+                frame,
+                partial(self._on_reply, call_id),
+                partial(self._on_done, call_id),
                 timeout=(left + 1.0) if left is not None else _NO_TIMEOUT,
                 express=True,
             )
-            node.stats["sent.call"] += 1
+            state.stats["sent.call"] += 1
             try:
                 async with asyncio.timeout(left):
                     return await future
@@ -339,13 +358,13 @@ class RpcClient:
             self.pending.pop(call_id, None)
 
     def _cancel_remote(self, robot: str, epoch: bytes, call_id: int) -> None:
-        node = self.node
+        state = self.state
         try:
-            node._session.put(
-                _keys.ctl(node.team_name, robot),
-                node._sealer.seal("cancel", call_id, call_id, to=robot, to_epoch=epoch),
+            state.zenoh.put(
+                _keys.ctl(state.team, robot),
+                state.sealer.seal("cancel", call_id, call_id, to=robot, to_epoch=epoch),
             )
-            node.stats["sent.cancel"] += 1
+            state.stats["sent.cancel"] += 1
         except Exception as exc:
             log.debug("could not send cancel to %r: %s", robot, exc)
 
@@ -357,27 +376,27 @@ class RpcClient:
         if sample is None:
             return  # zenoh's own errors (e.g. its timeout): our timers decide
         frame = sample.payload.to_bytes()
-        node = self.node
+        state = self.state
         reason = read_refusal(frame)
         if reason is not None:
             # Unsigned: anyone could have sent it. It counts only if nothing authentic comes
             # before the query ends (_on_done): a caller whose key the callee refused hears why.
             p.refusal = reason
-            node.stats["recv.refusal"] += 1
+            state.stats["recv.refusal"] += 1
             return
         try:
-            env = node._opener.open(frame)
+            env = state.opener.open(frame)
             if env.kind != "reply" or env.sender != p.robot or env.call_id != call_id:
                 raise WireError("reply does not match the call")
-            node._sessions.admit(env, node.name, node._sealer.epoch)
+            state.peers.admit(env, state.name, state.sealer.epoch)
             body = env.payload
             if not isinstance(body, dict):
                 raise WireError("reply body is not a map")
         except WireError as exc:
-            node.stats["refused.reply"] += 1
-            node._refusal_log.warn(p.robot, f"dropped a reply from {p.robot!r}: {exc}")
+            state.stats["refused.reply"] += 1
+            state.faults.warn(p.robot, f"dropped a reply from {p.robot!r}: {exc}")
             return
-        node.stats["recv.reply"] += 1
+        state.stats["recv.reply"] += 1
         if "ok" in body:
             p.future.set_result(body["ok"])
         elif isinstance(body.get("err"), dict) and body["err"].get("type") == "SessionChanged":
@@ -413,7 +432,7 @@ class RpcClient:
             )
         else:
             exc = UnknownRobot(
-                f"no member {p.robot!r} of team {self.node.team_name!r} answers",
+                f"no member {p.robot!r} of team {self.state.team!r} answers",
                 robot=p.robot,
                 procedure=p.procedure,
             )

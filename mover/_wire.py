@@ -353,6 +353,46 @@ class Opener:
         return aead
 
 
+def _array_header(n: int) -> bytes:
+    """The msgpack header of an array of ``n`` elements."""
+    if n < 16:
+        return bytes([0x90 | n])
+    if n < 65536:
+        return b"\xdc" + n.to_bytes(2, "big")
+    return b"\xdd" + n.to_bytes(4, "big")
+
+
+def broadcast_frames(sealer: Sealer, topic: str, items: list[bytes]) -> list[bytearray]:
+    """Sealed ``bc`` frames carrying ``items`` (each a :func:`pack`-ed ``[data, where, range]``)
+    on ``topic``: as few as fit under half the size limit, each payload ``[topic, [item, ...]]``
+    (a burst costs one seal and one zenoh message). An item alone over the limit raises
+    PayloadTooLarge."""
+    limit = sealer.max_size // 2
+    head = pack(topic)
+    frames = []
+    start = 0
+    while start < len(items):
+        end, size = start, 0
+        while end < len(items) and (end == start or size + len(items[end]) < limit):
+            size += len(items[end])
+            end += 1
+        payload = b"\x92" + head + _array_header(end - start) + b"".join(items[start:end])
+        frames.append(sealer.seal_packed("bc", payload))
+        start = end
+    return frames
+
+
+def read_broadcast(env: Envelope) -> tuple[str, list[Any]]:
+    """The topic and items of a ``bc`` envelope; raise WireError if it is not one."""
+    payload = env.payload
+    if env.kind != "bc" or not isinstance(payload, list) or len(payload) != 2:
+        raise WireError("not a broadcast envelope")
+    topic, items = payload
+    if not isinstance(topic, str) or not isinstance(items, list):
+        raise WireError("not a broadcast envelope")
+    return topic, items
+
+
 def refusal(reason: str) -> bytes:
     """An unsigned refusal frame for a caller that could not be authenticated."""
     return REFUSAL + reason.encode("utf-8", "replace")[:200]

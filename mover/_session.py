@@ -1,0 +1,135 @@
+"""What one process's parts share: who it is, its zenoh session, the one door into its loop,
+its seal and its view of the peers' sessions, its counters and its rate-limited fault log.
+
+A :class:`~mover.Node` makes one :class:`SessionState` and hands it to each of its parts — the
+RPC server and client (:mod:`mover._rpc`), pub/sub (:mod:`mover._radio`) and membership
+(:mod:`mover._membership`) — in their constructors; none of them reaches into the node or into
+another part. The zenoh session and the portal exist only while the node is open
+(:meth:`SessionState.opened` to :meth:`SessionState.closed`).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections import Counter
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import zenoh
+
+from ._bridge import Portal
+from ._config import NodeConfig
+from ._exceptions import MoverError
+from ._wire import Opener, Sealer, Sessions
+
+log = logging.getLogger("mover.node")
+
+
+class FaultLog:
+    """Logs faults (refused frames, dropped decisions), at most ``burst`` lines per source per
+    ``interval`` seconds, so that a flood of bad frames cannot flood the logs."""
+
+    def __init__(self, owner: str, *, burst: int = 20, interval: float = 60.0) -> None:
+        self.owner = owner
+        self.burst = burst
+        self.interval = interval
+        self._counts: Counter[str] = Counter()
+        self._window = 0.0
+
+    def warn(self, source: str, message: str) -> None:
+        """Log ``message`` (a fault seen from ``source``) unless its quota is used up."""
+        now = time.monotonic()
+        if now - self._window > self.interval:
+            self._counts.clear()
+            self._window = now
+        if len(self._counts) >= 4096 and source not in self._counts:
+            source = "(others)"  # bounded however many sources there are
+        self._counts[source] += 1
+        if self._counts[source] <= self.burst:
+            log.warning("%s: %s", self.owner, message)
+
+
+@dataclass(eq=False)
+class SessionState:
+    """One process's membership of a team, as its parts share it (see the module).
+
+    ``peers`` holds the verified sessions of the other members and the replay windows;
+    ``stats`` counts what was sent, received and refused (``sent.call``, ``refused``, ...).
+    """
+
+    name: str
+    team: str
+    sealer: Sealer
+    opener: Opener
+    kind: str = "robot"
+    config: NodeConfig = field(default_factory=NodeConfig)
+    observer: bool = False
+    on_refused: Literal["reply", "ignore"] = "reply"
+    started: float = field(default_factory=time.time)
+    peers: Sessions = field(default_factory=Sessions)
+    stats: Counter[str] = field(default_factory=Counter)
+    faults: FaultLog = field(init=False)
+    zenoh: Any = None  # the zenoh session while open
+    portal: Portal | None = None  # the door into the loop while open
+
+    def __post_init__(self) -> None:
+        self.faults = FaultLog(self.name)
+
+    @property
+    def is_open(self) -> bool:
+        """Whether the zenoh session is open."""
+        return self.zenoh is not None
+
+    def opened(self, session: Any, portal: Portal) -> None:
+        """The node opened ``session``; items from zenoh's threads go through ``portal``."""
+        self.zenoh, self.portal = session, portal
+
+    def closed(self) -> Any:
+        """The node is closing: the session it must close (no part uses it any more)."""
+        session, self.zenoh = self.zenoh, None
+        if self.portal is not None:
+            self.portal.close()
+        return session
+
+    def require_open(self) -> None:
+        """Raise MoverError unless the node is open."""
+        if self.zenoh is None:
+            raise MoverError("the node is not open (use 'async with Node(...)')")
+
+    def door(self) -> Portal:
+        """The portal (the node is open)."""
+        if self.portal is None:
+            raise MoverError("the node is not open (use 'async with Node(...)')")
+        return self.portal
+
+    def ask_all(
+        self,
+        key: str,
+        payload: bytes | bytearray,
+        on_reply: Callable[[Any], None],
+        on_done: Callable[[Any], None],
+        *,
+        timeout: float,
+        express: bool = False,
+    ) -> None:
+        """A zenoh get to every queryable on ``key`` (so that a stranger's queryable, complete
+        or not, cannot take the query away from the member), every reply handed to
+        ``on_reply`` on the loop, then ``on_done(None)`` when the query is finished."""
+        self.zenoh.get(
+            key,
+            self.door().callback(on_reply, on_done),
+            payload=payload,
+            target=zenoh.QueryTarget.ALL,
+            consolidation=zenoh.ConsolidationMode.NONE,
+            timeout=timeout,
+            express=express,
+        )
+
+    def connected(self) -> bool:
+        """Whether this node has a link to any other zenoh node (peer or router) now."""
+        if self.zenoh is None:
+            return False
+        info = self.zenoh.info
+        return bool(list(info.routers_zid()) or list(info.peers_zid()))
