@@ -70,7 +70,10 @@ async def stigmergic_navigation(
     async def navigate() -> dict[str, Any]:
         if isinstance(hw, EyeBotHardware):
             eyebot = EyeBot(rng, Learning(c_a=c_a, c_m=c_m, q=q))
-            return {"eyebot": await eyebot_loop(hw, eyebot, period, until)}
+            done = await eyebot_loop(hw, eyebot, period, until)
+            for policy in ("to_source", "to_target"):  # shorter lines in a report
+                done[policy] = [round(p, 4) for p in done[policy]]
+            return {"eyebot": done}
         footbot = FootBot(rng, Goal.TARGET, Motion(d=d, speed=speed, dt=hw.clock.tick_period))
         trips = await footbot_loop(hw, footbot, until)
         return {"trips": [t.wire() for t in trips]}

@@ -35,7 +35,8 @@ from robots.stigmergic import (
     Instruction,
     Learning,
     Motion,
-    read_leds,
+    footbot_seen,
+    obstacle_bearing,
     show_leds,
     trip_weight,
 )
@@ -152,12 +153,10 @@ def _start(arena: Arena, world: World, rng: np.random.Generator) -> RobotSpec:
 
 
 def _seen(below: Any, started: dict[str, float], now: float, settings: Settings) -> FootBotSeen:
-    shown = read_leds(below.led)
-    avoiding, goal = shown if shown is not None else (False, None)
     weight = 1.0
     if settings.weigh:
         weight = trip_weight(now - started.get(below.robot, now), settings.weigh_reference)
-    return FootBotSeen(below.beacon, avoiding, below.front, goal, weight)
+    return footbot_seen(below.beacon, below.front, below.led, weight)
 
 
 def _perceive(
@@ -171,14 +170,8 @@ def _perceive(
     odom = readings["odom"]
     pose = (float(odom[0]), float(odom[1]), float(odom[2]))
     ranges = readings["sonar"] or []
-    ahead = [
-        (r, bearing)
-        for k, r in enumerate(ranges)
-        if abs(bearing := math.remainder(2.0 * math.pi * k / len(ranges), 2.0 * math.pi))
-        < math.pi / 2
-    ]
-    near = min(ahead, default=None)
-    obstacle = near[1] if near is not None and near[0] < AVOID else None
+    angles = [2.0 * math.pi * k / len(ranges) for k in range(len(ranges))]
+    obstacle = obstacle_bearing(ranges, angles, AVOID)
     heard = None
     above = ceiling.above(rid)
     if above is not None and above[0] in instructions:

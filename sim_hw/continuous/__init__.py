@@ -8,7 +8,8 @@ Public face (everything else is private and may change):
 * the world — :class:`World` (synchronous, deterministic) and :class:`WorldServer` (its clock:
   lock-step or real time; robots ``join``, ``step`` and ``leave``);
 * backends of ``robots.hal`` — :func:`in_process` and :func:`remote` (over a ``mover.Node``),
-  both built on :class:`SimHardware`;
+  both built on :class:`SimHardware`; of ``robots.stigmergic``'s two kinds in process,
+  :func:`eyebot_in_process` and :func:`footbot_in_process`;
 * the ceiling layer — :class:`Ceiling` of :class:`EyeBotSpec` (eye-bots above the world and the
   devices between them and the foot-bots below); in a world process, eye-bots and foot-bots
   are robot processes of their own kinds (the ``eyebot`` and ``footbot`` backends, the areas
@@ -22,6 +23,7 @@ from sim_hw._lockstep import RobotDropped
 from ._ceiling import Below, Ceiling
 from ._generate import corridor_paths, double_corridor, free_points, random_obstacles
 from ._hardware import SimHardware, in_process, remote
+from ._kinds import eyebot_in_process, footbot_in_process
 from ._record import Recorder, plot_recording, read_recording
 from ._spec import (
     AreaSpec,
@@ -65,6 +67,8 @@ __all__ = [
     "WorldSpec",
     "corridor_paths",
     "double_corridor",
+    "eyebot_in_process",
+    "footbot_in_process",
     "free_points",
     "in_process",
     "load_world",
