@@ -13,6 +13,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+from mover import RemoteError
 from robots.hal import Sonar
 from robots.stigmergic import EyeBotHardware, FootBotHardware, Goal, Heard, Instruction, Spot
 from sim_hw import _caller
@@ -165,10 +166,19 @@ async def join_remote(
     world: str = "world",
     call_timeout: float = 30.0,
 ) -> EyeBotHardware | FootBotHardware:
-    """Join the world process ``world`` over ``node`` as an eye-bot or a foot-bot (``kind``)."""
-    joined, link = await _caller.remote(
-        node, robot_id, {**(spec or {}), "kind": kind}, world=world, call_timeout=call_timeout
-    )
+    """Join the world process ``world`` over ``node`` as an eye-bot or a foot-bot (``kind``).
+
+    A join the world refuses (no such eye-bot, a wrong kind, bad settings) raises ValueError
+    with the world's reason: the robot process says it in one line.
+    """
+    try:
+        joined, link = await _caller.remote(
+            node, robot_id, {**(spec or {}), "kind": kind}, world=world, call_timeout=call_timeout
+        )
+    except RemoteError as exc:
+        if exc.remote_type not in ("ValueError", "WorldFileError"):
+            raise
+        raise ValueError(f"world {world!r} refused {robot_id!r}: {exc.message}") from None
     _kind_of(joined, robot_id, kind)
     if kind == EYEBOT:
         return EyeBotSim(robot_id, joined["spec"], joined["readings"], link).eyebot()
