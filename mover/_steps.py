@@ -143,13 +143,42 @@ class Decision:
         raise WireError(f"not a decision: {value!r:.80}")
 
 
-class _LocalOp:
-    """This member's operation in an OR step, for the designated member's ``or_passed``."""
+@dataclass(frozen=True, slots=True)
+class Settled:
+    """How a task of a step ended: its ``value``, or the ``error`` it raised (kept as data, so
+    that one task's failure is its step's to judge, not its task group's)."""
 
-    def __init__(self, clock: RunClock, operation: Callable[[], Awaitable[Any]]) -> None:
+    value: Any = None
+    error: Exception | None = None
+
+    def get(self) -> Any:
+        """The value, or raise the error."""
+        if self.error is not None:
+            raise self.error
+        return self.value
+
+
+async def settled(awaitable: Awaitable[Any]) -> Settled:
+    """``awaitable``'s outcome as a :class:`Settled` (cancellation still propagates)."""
+    try:
+        return Settled(await awaitable)
+    except Exception as exc:
+        return Settled(error=exc)
+
+
+Spawn = Callable[[Awaitable[Any]], "asyncio.Task[Settled]"]
+
+
+class _LocalOp:
+    """This member's operation in an OR step, for the designated member's ``or_passed``; it
+    runs as a task of its step (``spawn``), and settles (:class:`Settled`) rather than raise."""
+
+    def __init__(
+        self, clock: RunClock, operation: Callable[[], Awaitable[Any]], spawn: Spawn
+    ) -> None:
         self.clock = clock
         self.finished_at: float | None = None  # simulated time the operation returned at
-        self.op: asyncio.Future[Any] = asyncio.ensure_future(self._run(operation))
+        self.op: asyncio.Task[Settled] = spawn(self._run(operation))
 
     async def _run(self, operation: Callable[[], Awaitable[Any]]) -> Any:
         result = await operation()

@@ -77,18 +77,14 @@ import contextlib
 import logging
 import random
 import time
-from collections.abc import Awaitable, Callable, Sequence
+from collections.abc import Awaitable, Callable, Coroutine, Sequence
 from typing import TYPE_CHECKING, Any
 
+from ._collectives import Collectives
 from ._exceptions import (
     MemberLost,
     NotDelivered,
 )
-
-if TYPE_CHECKING:
-    from ._node import Node
-
-from ._collectives import Collectives
 from ._steps import (
     _STEP_MEMORY,
     CALL_TIMEOUT,
@@ -101,14 +97,18 @@ from ._steps import (
     Outcome,
     Policy,
     RunClock,
+    Settled,
     StepMetrics,
     _LocalOp,
-    _quiet,
     _Retry,
     _unwire,
     seed_of,
+    settled,
     wait_reachable,
 )
+
+if TYPE_CHECKING:
+    from ._node import Node
 
 log = logging.getLogger("mover.tasks")
 
@@ -133,6 +133,50 @@ __all__ = [
 
 
 # -- a member's side ------------------------------------------------------------------------------
+
+
+class _StepTasks:
+    """The tasks one step starts (its operation, its polls, its all-to-all sends), owned by one
+    :class:`asyncio.TaskGroup`: leaving the block — decided, failed or cancelled — awaits every
+    one of them, and :meth:`cancel` first stops those still running. An error of the block or of
+    a :meth:`spawn`-ed task cancels the others and is raised as itself (not as a group), so a
+    step raises what the member's program expects (MemberLost, a CallError)."""
+
+    def __init__(self) -> None:
+        self._group = asyncio.TaskGroup()
+        self._tasks: list[asyncio.Task[Any]] = []
+
+    async def __aenter__(self) -> _StepTasks:
+        await self._group.__aenter__()
+        return self
+
+    async def __aexit__(self, *exc: Any) -> None:
+        try:
+            await self._group.__aexit__(*exc)
+        except BaseExceptionGroup as group:
+            raise _first(group) from None
+
+    def start(self, awaitable: Awaitable[Any]) -> asyncio.Task[Settled]:
+        """A task whose outcome the step judges (it settles, it does not raise)."""
+        task = self._group.create_task(settled(awaitable))
+        self._tasks.append(task)
+        return task
+
+    def spawn(self, coroutine: Coroutine[Any, Any, Any]) -> asyncio.Task[Any]:
+        """A task whose error fails the step."""
+        task = self._group.create_task(coroutine)
+        self._tasks.append(task)
+        return task
+
+    def cancel(self) -> None:
+        """Stop the tasks still running (leaving the block then awaits their cleanup)."""
+        for task in self._tasks:
+            task.cancel()
+
+
+def _first(group: BaseExceptionGroup[BaseException]) -> BaseException:
+    error = group.exceptions[0]
+    return _first(error) if isinstance(error, BaseExceptionGroup) else error
 
 
 class TaskTeam:
@@ -259,24 +303,28 @@ class TaskTeam:
         returns. Raises MemberLost if a member is lost (policy ``fail``) or all are.
         """
         metrics = self._begin("or")
-        local = _LocalOp(self.clock, operation) if self.clock and self.simulated else None
-        op = local.op if local is not None else asyncio.ensure_future(operation())
-        self.collectives.reached(self.run, metrics.step, local)
-        try:
-            decision = await self._or_decision(metrics, op, local)
-        finally:
-            if not op.done():
-                op.cancel()
-            if local is not None:
-                local.clock.hold(None)  # after the cancel: the operation hands in nothing more
-            await asyncio.gather(op, return_exceptions=True)  # the losers' cleanup runs here
+        async with _StepTasks() as tasks:  # leaving it awaits the losers' cleanup
+            clock = self.clock if self.simulated else None
+            local = _LocalOp(clock, operation, tasks.start) if clock is not None else None
+            op = local.op if local is not None else tasks.start(operation())
+            self.collectives.reached(self.run, metrics.step, local)
+            try:
+                decision = await self._or_decision(metrics, tasks, op, local)
+            finally:
+                tasks.cancel()  # the losers' operations, a poll still under way
+                if local is not None:
+                    local.clock.hold(None)  # after the cancel: the operation hands in no more
         metrics.continued = time.perf_counter()
         self._raise_lost(metrics, decision)
         outcome = Outcome(decision.winner, decision.result)
         return await continuation(outcome) if continuation else outcome
 
     async def _or_decision(
-        self, metrics: StepMetrics, op: asyncio.Future[Any], local: _LocalOp | None
+        self,
+        metrics: StepMetrics,
+        tasks: _StepTasks,
+        op: asyncio.Task[Settled],
+        local: _LocalOp | None,
     ) -> Decision:
         """Wait for the step's decision: claim it if ``op`` finishes first, else hear it.
 
@@ -288,7 +336,12 @@ class TaskTeam:
         heard = self.collectives.heard(self.run, metrics.step)
         designated = await self._designated()
         try:
-            return await self._or_wait(metrics, op, heard, designated, local)
+            decision = await self._or_wait(metrics, tasks, op, heard, designated, local)
+            if not heard.done():
+                # Known here now (a claim's or a poll's answer), as if heard: should this
+                # member become the designated one, it hands the decision on (see Collectives).
+                heard.set_result(decision)
+            return decision
         finally:
             # The designated member counts its announcement's deliveries (n-1, or none), and
             # in simulated time its questions.
@@ -297,12 +350,13 @@ class TaskTeam:
     async def _or_wait(
         self,
         metrics: StepMetrics,
-        op: asyncio.Future[Any],
+        tasks: _StepTasks,
+        op: asyncio.Task[Settled],
         heard: asyncio.Future[Decision],
         designated: str,
         local: _LocalOp | None,
     ) -> Decision:
-        poll: asyncio.Future[Any] | None = None
+        poll: asyncio.Task[Settled] | None = None
         poll_at = time.monotonic() + POLL_AFTER
         while True:
             args = (self.run, metrics.step, self.me, self.members)
@@ -310,12 +364,13 @@ class TaskTeam:
                 if heard.done():
                     return heard.result()
                 if poll is not None and poll.done():
-                    return Decision.from_wire(poll.result())  # raises _Retry if it failed
-                if op.done() and not op.cancelled() and op.exception() is None:
+                    return Decision.from_wire(poll.result().get())  # raises _Retry if failed
+                ended = op.result() if op.done() else None
+                if ended is not None and ended.error is None:
                     metrics.finished = metrics.finished or time.perf_counter()
                     when = () if local is None else (local.finished_at,)  # simulated time
                     answer = await self._ask(
-                        metrics, designated, "mover.or_claim", *args, op.result(), *when
+                        metrics, designated, "mover.or_claim", *args, ended.value, *when
                     )
                     return Decision.from_wire(answer)
                 waiting: set[asyncio.Future[Any]] = {heard}
@@ -328,20 +383,19 @@ class TaskTeam:
                     waiting, timeout=timeout, return_when=asyncio.FIRST_COMPLETED
                 )
                 if not done and poll is None:
-                    poll = asyncio.ensure_future(
-                        self._ask(metrics, designated, "mover.or_join", *args)
-                    )
-                    poll.add_done_callback(_quiet)
-                elif op in done and op.exception() is not None:
+                    poll = tasks.start(self._ask(metrics, designated, "mover.or_join", *args))
+                elif op in done and op.result().error is not None:
                     log.warning(
                         "%s: the operation of step %d failed: %r",
                         self.me,
                         metrics.step,
-                        op.exception(),
+                        op.result().error,
                     )
             except _Retry:
                 await self._recover(designated)
                 designated = await self._designated()
+                if poll is not None:
+                    poll.cancel()  # (if the retry came from a claim, a poll may be under way)
                 poll, poll_at = None, time.monotonic()  # ask the (new) designated member now
 
     async def distributed_and(
@@ -423,11 +477,13 @@ class TaskTeam:
                     await self._recover(member)
 
         self.collectives.and_put(self.run, metrics.step, self.me, self.members, result)
-        senders = [asyncio.ensure_future(send(m)) for m in self.members if m != self.me]
-        try:
+        # Leaving waits for every send (the others need this result, even once this member
+        # has all of theirs); a send that fails for good fails the step, and cancels the rest.
+        async with _StepTasks() as senders:
+            for member in self.members:
+                if member != self.me:
+                    senders.spawn(send(member))
             return await asyncio.shield(state.decision)
-        finally:
-            await asyncio.gather(*senders, return_exceptions=True)
 
     # -- helpers ------------------------------------------------------------------------------
 

@@ -213,3 +213,41 @@ async def test_a_successor_that_heard_the_decision_hands_it_on(nodes: list[Node]
     await n2.team.wait_gone("n0", timeout=10)
     answer = await n2.call("n1", "mover.or_join", "r", 1, "n2", members, timeout=3)
     assert Decision.from_wire(answer) == heard
+
+
+@pytest.mark.parametrize("successor_learns", ["heard", "asked"])
+async def test_the_designated_member_killed_right_after_it_announced(
+    nodes: list[Node], successor_learns: str
+) -> None:
+    """n0 (the designated member) wins an OR, announces, and is gone at once. Its successor n1
+    learned the decision (from the announcement, or, having started the step late, by asking
+    n0) and moved on; n2, which had not started the step yet (it missed the announcement), asks
+    n1, now the designated member: n1 hands on the decision it learned, and n2 agrees on n0
+    without n1 ever joining its own takeover step."""
+    n0, n1, n2 = nodes[:3]
+    members = [n0.name, n1.name, n2.name]
+
+    async def at_once() -> str:
+        return "n0's"
+
+    async def long() -> str:
+        await asyncio.sleep(30)
+        return "late"
+
+    t0 = TaskTeam(n0, "r", members)
+    if successor_learns == "heard":
+        t1 = TaskTeam(n1, "r", members)
+        first, second = await asyncio.gather(
+            t0.distributed_or(at_once), asyncio.wait_for(t1.distributed_or(long), 10)
+        )
+    else:
+        first = await t0.distributed_or(at_once)
+        t1 = TaskTeam(n1, "r", members)  # too late to hear the announcement: it asks n0
+        second = await asyncio.wait_for(t1.distributed_or(long), 10)
+    assert first.winner == second.winner == "n0"
+    await n0.close()  # right after its announcement
+    await n1.team.wait_gone("n0", timeout=10)
+    await n2.team.wait_gone("n0", timeout=10)
+    t2 = TaskTeam(n2, "r", members)  # its listener starts now: the announcement is past
+    late = await asyncio.wait_for(t2.distributed_or(long), 10)
+    assert (late.winner, late.result) == ("n0", "n0's")
