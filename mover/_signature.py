@@ -162,18 +162,15 @@ class Signature:
         self._plain = all(p.kind is p.POSITIONAL_OR_KEYWORD for p in params)
         self._positional = [(p.name, self.checks.get(p.name)) for p in params]
         self._required = sum(1 for p in params if p.default is p.empty)
+        self._index = {p.name: i for i, p in enumerate(params)}
+        self._defaults = [p.default for p in params]
 
     def bind(self, args: list[Any], kwargs: dict[str, Any]) -> tuple[list[Any], dict[str, Any]]:
         """Checked (and converted) arguments; raise TypeError saying what is wrong."""
-        if self._plain and not kwargs and self._required <= len(args) <= len(self._positional):
-            out = list(args)
-            for i, (name, check) in enumerate(self._positional[: len(args)]):
-                if check is not None:
-                    try:
-                        out[i] = check(args[i])
-                    except TypeError as exc:
-                        raise TypeError(f"argument {name!r}: {exc}") from None
-            return out, {}
+        if self._plain and len(args) <= len(self._positional):
+            out = self._placed(args, kwargs)
+            if out is not None:
+                return out, {}
         bound = self.signature.bind(*args, **kwargs)
         for name, value in bound.arguments.items():
             check = self.checks.get(name)
@@ -190,6 +187,35 @@ class Signature:
             except TypeError as exc:
                 raise TypeError(f"argument {name!r}: {exc}") from None
         return list(bound.args), dict(bound.kwargs)
+
+    def _placed(self, args: list[Any], kwargs: dict[str, Any]) -> list[Any] | None:
+        """The checked arguments in their places (keywords too, defaults filling the gaps),
+        prepared at export; None if that is not simple (then inspect binds, and says what is
+        wrong)."""
+        n = len(args)
+        if kwargs:
+            out = list(args) + self._defaults[n:]
+            given = list(range(n))
+            for name, value in kwargs.items():
+                i = self._index.get(name)
+                if i is None or i < n:
+                    return None
+                out[i] = value
+                given.append(i)
+            if any(v is inspect.Parameter.empty for v in out):
+                return None
+        elif n < self._required:
+            return None
+        else:
+            out, given = list(args), list(range(n))
+        for i in given:
+            name, check = self._positional[i]
+            if check is not None:
+                try:
+                    out[i] = check(out[i])
+                except TypeError as exc:
+                    raise TypeError(f"argument {name!r}: {exc}") from None
+        return out
 
     def describe(self) -> str:
         """The signature as text (for listings), with its annotations resolved where they can be

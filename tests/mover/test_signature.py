@@ -81,3 +81,22 @@ def test_the_prepared_path_checks_as_the_full_binding_does() -> None:
         sig.bind([], {})
     with pytest.raises(TypeError, match="too many positional"):
         sig.bind([1, 2, 3], {})
+
+
+def test_keywords_are_placed_as_prepared_at_export() -> None:
+    """Keyword arguments go to their places without inspect's binding (defaults fill the
+    gaps, unchecked, as inspect leaves them); what is not simple still gets inspect's words."""
+
+    def move(x: float, y: float = 0.0, speed: int | None = None) -> None: ...
+
+    sig = Signature(move)
+    assert sig.bind([1], {"speed": 3}) == ([1.0, 0.0, 3], {})
+    assert sig.bind([], {"y": 2, "x": 1}) == ([1.0, 2.0, None], {})
+    with pytest.raises(TypeError, match="argument 'speed': expected"):
+        sig.bind([1], {"speed": "fast"})
+    with pytest.raises(TypeError, match="multiple values for argument 'x'"):
+        sig.bind([1], {"x": 2})
+    with pytest.raises(TypeError, match="unexpected keyword argument 'z'"):
+        sig.bind([1], {"z": 2})
+    with pytest.raises(TypeError, match="missing a required argument: 'x'"):
+        sig.bind([], {"y": 2})
