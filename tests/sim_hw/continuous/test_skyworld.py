@@ -170,16 +170,13 @@ async def _run(seed: int, duration: float = 40.0) -> tuple[list[Any], list[Any]]
     )
     rng = np.random.SeedSequence(seed).spawn(len(hws))
     until = hws[0].clock.now() + duration
-    loops = (
-        [
-            eyebot_loop(hw, EyeBot(np.random.default_rng(r)), 1.0, until)
-            for hw, r in zip(hws[: len(eyes)], rng, strict=False)
-        ]
-        + [
-            footbot_loop(hw, FootBot(np.random.default_rng(r)), until)
-            for hw, r in zip(hws[len(eyes) :], rng[len(eyes) :], strict=True)
-        ]
-    )
+    loops = [
+        eyebot_loop(hw, EyeBot(np.random.default_rng(r)), 1.0, until)
+        for hw, r in zip(hws[: len(eyes)], rng, strict=False)
+    ] + [
+        footbot_loop(hw, FootBot(np.random.default_rng(r)), until)
+        for hw, r in zip(hws[len(eyes) :], rng[len(eyes) :], strict=True)
+    ]
     done = await asyncio.gather(*loops)
     poses = [server.world.pose(f) for f in feet]
     await server.aclose()
