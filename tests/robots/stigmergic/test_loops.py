@@ -25,6 +25,7 @@ from robots.stigmergic import (
     Trip,
     direction_index,
     eyebot_loop,
+    eyebot_procedures,
     footbot_loop,
     footbot_procedures,
     footbot_seen,
@@ -272,3 +273,14 @@ def test_leds_seen_from_above_say_where_a_foot_bot_goes_and_whether_it_avoids() 
 
 def test_a_trip_is_plain_data() -> None:
     assert Trip(Goal.SOURCE, 1.5, 9.0).wire() == ["source", 1.5, 9.0]
+
+
+def test_an_eye_bot_exports_what_its_camera_sees() -> None:
+    fake = FakeEye(spots=(Spot((0.5, 0.0), None, show_leds(True, None)),))
+    procedures = eyebot_procedures(fake.hardware())
+    assert procedures["robot.sense"]() == {
+        "time": 0.0,
+        "below": [[[0.5, 0.0], None, "avoid/off"]],
+    }
+    assert procedures["robot.pose"]() == [0.0, 0.0, 0.0]
+    procedures["robot.stop"]()  # nothing to stop: it hangs still
