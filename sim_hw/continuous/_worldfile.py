@@ -54,7 +54,7 @@ MAX_RAYS = 360
 MAX_FILE_BYTES = 16 * 2**20
 """The largest world file read."""
 MAX_EYEBOTS = 1000
-"""The most eye-bots a world file may hang from the ceiling."""
+"""The most eye-bots a world file may hang from the ceiling (and the most areas it may mark)."""
 
 
 class WorldFileError(ValueError):
@@ -359,6 +359,8 @@ def _ceiling(top: _Table, spec: WorldSpec, source: str) -> WorldSpec:
     if len(eyes) > MAX_EYEBOTS:
         raise WorldFileError(source, "eyebots", f"at most {MAX_EYEBOTS}, got {len(eyes)}")
     areas = [_finish(t, _area(t)) for t in top.tables("areas")]
+    if len(areas) > MAX_EYEBOTS:
+        raise WorldFileError(source, "areas", f"at most {MAX_EYEBOTS}, got {len(areas)}")
     for key, ids in (("eyebots", [e.id for e in eyes]), ("areas", [a.id for a in areas])):
         for i, ident in enumerate(ids):
             if ident in ids[:i] or (key == "eyebots" and ident in spec.robots):
