@@ -17,7 +17,6 @@ on a lock-step world and it repeats.
 from __future__ import annotations
 
 import time
-from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -34,6 +33,7 @@ from robots.stigmergic import (
     Motion,
     eyebot_loop,
     footbot_loop,
+    travel_times,
 )
 
 #: Ticks between the latest member's tick when the team agreed and the common start.
@@ -108,20 +108,3 @@ async def _start(hw: EyeBotHardware | FootBotHardware, team: RunTeam) -> float:
     while hw.clock.now() < start - 1e-9:
         await hw.clock.tick()
     return hw.clock.now()
-
-
-def travel_times(trips: Mapping[str, list[list[Any]]], start: float) -> dict[str, Any]:
-    """The paper's figures from every foot-bot's trips (``[goal, start, end]`` each): ``t_1``
-    (the first arrival at the target, seconds after ``start``), ``t_a`` (the mean trip after
-    each foot-bot's first; the first one starts in exploration), ``t_a_all`` (every trip),
-    ``trips`` and ``footbots``; None where there is no trip to count."""
-    arrivals = [end for bot in trips.values() for goal, _, end in bot if goal == Goal.TARGET.value]
-    later = [end - begin for bot in trips.values() for _, begin, end in bot[1:]]
-    every = [end - begin for bot in trips.values() for _, begin, end in bot]
-    return {
-        "t_1": min(arrivals) - start if arrivals else None,
-        "t_a": float(np.mean(later)) if later else None,
-        "t_a_all": float(np.mean(every)) if every else None,
-        "trips": len(every),
-        "footbots": len(trips),
-    }

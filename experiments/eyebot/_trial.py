@@ -38,6 +38,7 @@ from robots.stigmergic import (
     footbot_seen,
     obstacle_bearing,
     show_leds,
+    travel_times,
     trip_weight,
 )
 from sim_hw.continuous import TICK, Ceiling, RobotSpec, SonarSpec, World
@@ -102,7 +103,6 @@ def run(arena: Arena, settings: Settings, seed: int) -> dict[str, Any]:
     ticks = round(settings.duration / TICK)
     window_from = ticks - round(settings.window / TICK)
     counts = [0, 0]  # foot-bot-ticks in the right, the left corridor (last window)
-    first: float | None = None
     for tick in range(ticks):
         due = len(feet) < settings.footbots and (deploy == 0 or tick % deploy == 0 or not feet)
         while due and len(feet) < settings.footbots:
@@ -124,8 +124,6 @@ def run(arena: Arena, settings: Settings, seed: int) -> dict[str, Any]:
                 now = world.time
                 trips.append({"robot": rid, "to": goal.value, "start": started[rid], "end": now})
                 started[rid] = now
-                if goal is Goal.TARGET and first is None:
-                    first = now
             world.set_command(
                 rid,
                 {"v": command.v, "w": command.w, "led": show_leds(command.avoiding, command.front)},
@@ -133,7 +131,7 @@ def run(arena: Arena, settings: Settings, seed: int) -> dict[str, Any]:
         if arena.corridors is not None and tick >= window_from:
             _count(arena, world, feet, counts)
         world.step()
-    return _figures(arena, settings, seed, trips, first, counts, time.perf_counter() - wall)
+    return _figures(arena, settings, seed, trips, counts, time.perf_counter() - wall)
 
 
 def _start(arena: Arena, world: World, rng: np.random.Generator) -> RobotSpec:
@@ -202,17 +200,13 @@ def _figures(
     settings: Settings,
     seed: int,
     trips: list[dict[str, Any]],
-    first: float | None,
     counts: list[int],
     wall: float,
 ) -> dict[str, Any]:
-    firsts: set[str] = set()
-    later = []
+    by_robot: dict[str, list[list[Any]]] = {}
     for trip in trips:
-        if trip["robot"] in firsts:
-            later.append(trip["end"] - trip["start"])
-        firsts.add(trip["robot"])
-    everything = [t["end"] - t["start"] for t in trips]
+        by_robot.setdefault(trip["robot"], []).append([trip["to"], trip["start"], trip["end"]])
+    times = travel_times(by_robot, 0.0)
     total = counts[0] + counts[1]
     return {
         "arena": arena.spec.name,
@@ -221,10 +215,10 @@ def _figures(
         "shortest": settings.shortest,
         "weigh": settings.weigh,
         "duration": settings.duration,
-        "t_1": first,
-        "t_a": float(np.mean(later)) if later else None,
-        "t_a_all": float(np.mean(everything)) if everything else None,
-        "trips": len(trips),
+        "t_1": times["t_1"],
+        "t_a": times["t_a"],
+        "t_a_all": times["t_a_all"],
+        "trips": times["trips"],
         "c_r": counts[0],
         "c_l": counts[1],
         "rho": counts[0] / total if total else None,

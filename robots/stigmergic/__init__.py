@@ -33,7 +33,14 @@ from robots.stigmergic._hal import (
 )
 from robots.stigmergic._leds import read as read_leds
 from robots.stigmergic._leds import show as show_leds
-from robots.stigmergic._loops import AVOID, Trip, eyebot_loop, footbot_loop, perceive
+from robots.stigmergic._loops import (
+    AVOID,
+    Trip,
+    eyebot_loop,
+    footbot_loop,
+    perceive,
+    travel_times,
+)
 from robots.stigmergic._policy import (
     DIRECTIONS,
     SPACING,
@@ -80,5 +87,6 @@ __all__ = [
     "perceive",
     "read_leds",
     "show_leds",
+    "travel_times",
     "trip_weight",
 ]
