@@ -217,6 +217,7 @@ def _figures(
         "duration": settings.duration,
         "t_1": times["t_1"],
         "t_a": times["t_a"],
+        "t_a_median": times["t_a_median"],
         "t_a_all": times["t_a_all"],
         "trips": times["trips"],
         "c_r": counts[0],

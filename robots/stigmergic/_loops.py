@@ -108,14 +108,16 @@ async def footbot_loop(
 def travel_times(trips: Mapping[str, list[list[Any]]], start: float) -> dict[str, Any]:
     """The paper's figures from every foot-bot's trips (``[goal, start, end]`` each): ``t_1``
     (the first arrival at the target, seconds after ``start``), ``t_a`` (the mean trip after
-    each foot-bot's first; the first one starts in exploration), ``t_a_all`` (every trip),
-    ``trips`` and ``footbots``; None where there is no trip to count."""
+    each foot-bot's first; the first one starts in exploration), ``t_a_median`` (their median:
+    a few lost trips pull the mean up), ``t_a_all`` (every trip), ``trips`` and ``footbots``;
+    None where there is no trip to count."""
     arrivals = [end for bot in trips.values() for goal, _, end in bot if goal == Goal.TARGET.value]
     later = [end - begin for bot in trips.values() for _, begin, end in bot[1:]]
     every = [end - begin for bot in trips.values() for _, begin, end in bot]
     return {
         "t_1": min(arrivals) - start if arrivals else None,
         "t_a": float(np.mean(later)) if later else None,
+        "t_a_median": float(np.median(later)) if later else None,
         "t_a_all": float(np.mean(every)) if every else None,
         "trips": len(every),
         "footbots": len(trips),
