@@ -97,7 +97,7 @@ def pack(value: Any) -> bytes:
         raise WireError(f"cannot encode value: {exc}") from exc
 
 
-def unpack(data: bytes, *, max_size: int = DEFAULT_MAX_SIZE) -> Any:
+def unpack(data: bytes | memoryview, *, max_size: int = DEFAULT_MAX_SIZE) -> Any:
     """Decode what :func:`pack` made; raise :class:`WireError` on anything malformed."""
     if len(data) > max_size:
         raise PayloadTooLarge(f"{len(data)} bytes is over the limit of {max_size}")
@@ -174,16 +174,34 @@ class Sealer:
         self._aead = session_key(key, sender, self.epoch)
         self._counter = 0
         self.max_size = max_size
+        # One packer kept: a payload is packed into its buffer (reused, at most as large as the
+        # largest payload sealed) and encrypted from there, with no copy out of msgpack and no
+        # fresh large allocation (which costs page faults: see docs/transport.md).
+        self._packer = msgpack.Packer(default=_default, use_bin_type=True, autoreset=False)
 
     def seal(
         self, kind: str, payload: Any, call_id: int = 0, *, to: str = "", to_epoch: bytes = b""
     ) -> bytearray:
         """Return the sealed frame of a new envelope for ``to`` in its session ``to_epoch``
         (empty: the team, or whoever asked); raise PayloadTooLarge over the limit."""
-        return self.seal_packed(kind, pack(payload), call_id, to=to, to_epoch=to_epoch)
+        packer = self._packer
+        try:
+            packer.pack(payload)
+            with packer.getbuffer() as packed:
+                return self.seal_packed(kind, packed, call_id, to=to, to_epoch=to_epoch)
+        except (TypeError, ValueError, OverflowError) as exc:
+            raise WireError(f"cannot encode value: {exc}") from exc
+        finally:
+            packer.reset()
 
     def seal_packed(
-        self, kind: str, payload: bytes, call_id: int = 0, *, to: str = "", to_epoch: bytes = b""
+        self,
+        kind: str,
+        payload: bytes | memoryview,
+        call_id: int = 0,
+        *,
+        to: str = "",
+        to_epoch: bytes = b"",
     ) -> bytearray:
         """Like :meth:`seal` for a payload already encoded with :func:`pack`."""
         self._counter += 1
@@ -296,6 +314,9 @@ class Opener:
         self._key = key
         self.max_size = max_size
         self._keys: dict[tuple[str, bytes], AESGCM] = {}
+        # Plaintexts are decrypted into this buffer (kept, as large as the largest frame
+        # opened, at most max_size) and decoded from there: decoding copies out what it keeps.
+        self._plain = bytearray()
 
     def open(self, frame: bytes) -> Envelope:
         """Return the envelope in a sealed frame (authentic, not yet judged fresh: see
@@ -326,11 +347,18 @@ class Opener:
             and len(sender) <= 256
         ):
             raise WireError("envelope fields have wrong types")
-        try:
-            plain = self._aead(sender, nonce[:8]).decrypt(b"\0\0\0\0" + nonce[8:], sealed, header)
-        except InvalidTag:
-            raise WireError("bad signature (no key, or another team's key)") from None
-        payload = unpack(plain, max_size=self.max_size)
+        size = len(sealed) - TAG_SIZE
+        if size < 0:
+            raise WireError("truncated frame")
+        if len(self._plain) < size:
+            self._plain = bytearray(size)
+        with memoryview(self._plain)[:size] as plain:
+            try:
+                aead = self._aead(sender, nonce[:8])
+                aead.decrypt_into(b"\0\0\0\0" + nonce[8:], sealed, header, plain)
+            except InvalidTag:
+                raise WireError("bad signature (no key, or another team's key)") from None
+            payload = unpack(plain, max_size=self.max_size)
         return Envelope(
             team,
             sender,
