@@ -1,6 +1,7 @@
 """What a collective step is made of: its constants, its outcome and metrics, the decision
 the designated member takes, the state it keeps, and a member's operation as the designated
-member sees it in simulated time (:class:`RunClock`). See :mod:`mover._tasks` for the protocol.
+member sees it in simulated time (:class:`RunClock`), and the one owner of a step's tasks
+(:class:`_StepTasks`). See :mod:`mover._tasks` for the protocol.
 """
 
 from __future__ import annotations
@@ -10,7 +11,7 @@ import contextlib
 import hashlib
 import logging
 import time
-from collections.abc import Awaitable, Callable, Sequence
+from collections.abc import Awaitable, Callable, Coroutine, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Literal, Protocol
 
@@ -164,6 +165,50 @@ async def settled(awaitable: Awaitable[Any]) -> Settled:
         return Settled(await awaitable)
     except Exception as exc:
         return Settled(error=exc)
+
+
+class _StepTasks:
+    """The tasks one step starts (its operation, its polls, its all-to-all sends), owned by one
+    :class:`asyncio.TaskGroup`: leaving the block — decided, failed or cancelled — awaits every
+    one of them, and :meth:`cancel` first stops those still running. An error of the block or of
+    a :meth:`spawn`-ed task cancels the others and is raised as itself (not as a group), so a
+    step raises what the member's program expects (MemberLost, a CallError)."""
+
+    def __init__(self) -> None:
+        self._group = asyncio.TaskGroup()
+        self._tasks: list[asyncio.Task[Any]] = []
+
+    async def __aenter__(self) -> _StepTasks:
+        await self._group.__aenter__()
+        return self
+
+    async def __aexit__(self, *exc: Any) -> None:
+        try:
+            await self._group.__aexit__(*exc)
+        except BaseExceptionGroup as group:
+            raise _first(group) from None
+
+    def start(self, awaitable: Awaitable[Any]) -> asyncio.Task[Settled]:
+        """A task whose outcome the step judges (it settles, it does not raise)."""
+        task = self._group.create_task(settled(awaitable))
+        self._tasks.append(task)
+        return task
+
+    def spawn(self, coroutine: Coroutine[Any, Any, Any]) -> asyncio.Task[Any]:
+        """A task whose error fails the step."""
+        task = self._group.create_task(coroutine)
+        self._tasks.append(task)
+        return task
+
+    def cancel(self) -> None:
+        """Stop the tasks still running (leaving the block then awaits their cleanup)."""
+        for task in self._tasks:
+            task.cancel()
+
+
+def _first(group: BaseExceptionGroup[BaseException]) -> BaseException:
+    error = group.exceptions[0]
+    return _first(error) if isinstance(error, BaseExceptionGroup) else error
 
 
 Spawn = Callable[[Awaitable[Any]], "asyncio.Task[Settled]"]
