@@ -66,11 +66,14 @@ class RunTeam(TaskTeam):
     info: dict[str, Any]
 
     async def report(self, phase: str, **info: Any) -> None:
-        """Tell the launcher (and anyone listening) how this member is doing."""
+        """Tell the launcher (and anyone listening) how this member is doing. In simulated time
+        the report carries this member's clock as ``t`` (unless ``info`` has one), so that a
+        watcher can time phases without racing the world's snapshots."""
         self.phase, self.info = phase, info
+        timed = {"t": self.clock.now()} if self.clock is not None and self.simulated else {}
         await self.node.broadcast(
             f"{PROGRESS_TOPIC}/{self.run}",
-            {"member": self.me, "phase": phase, **info},
+            {"member": self.me, "phase": phase, **timed, **info},
             reliable=True,
         )
 
