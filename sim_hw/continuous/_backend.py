@@ -36,10 +36,23 @@ if TYPE_CHECKING:
     from robots.backend import HardwareBackend
 
 
+OPTIONS = frozenset({"world", "call_timeout"})
+"""What every backend here takes: which world to join, and how long a call to it may take."""
+
+
+def _link(options: Mapping[str, Any]) -> dict[str, Any]:
+    """The link to the world from a backend's options: ``world`` (default ``"world"``) and
+    ``call_timeout`` (seconds, default 30)."""
+    return {
+        "world": str(options.get("world", "world")),
+        "call_timeout": float(options.get("call_timeout", 30.0)),
+    }
+
+
 class ContinuousBackend:
     """Joins a continuous world process; a :class:`robots.backend.HardwareBackend`."""
 
-    options = frozenset({"world", "call_timeout"})
+    options = OPTIONS
 
     async def connect(
         self, node: Node, robot_id: str, spec: Mapping[str, Any], **options: Any
@@ -53,8 +66,7 @@ class ContinuousBackend:
             node,
             robot_id,
             dict(spec) or None,
-            world=str(options.get("world", "world")),
-            call_timeout=float(options.get("call_timeout", 30.0)),
+            **_link(options),
         )
 
     def procedures(self, hw: Hardware) -> Mapping[str, Callable[..., Any]]:
@@ -68,7 +80,7 @@ BACKEND: HardwareBackend[Hardware] = ContinuousBackend()
 class EyeBotBackend:
     """Joins a continuous world process as one of its eye-bots; a ``HardwareBackend``."""
 
-    options = frozenset({"world", "call_timeout"})
+    options = OPTIONS
 
     async def connect(
         self, node: Node, robot_id: str, spec: Mapping[str, Any], **options: Any
@@ -80,8 +92,7 @@ class EyeBotBackend:
             robot_id,
             EYEBOT,
             spec,
-            world=str(options.get("world", "world")),
-            call_timeout=float(options.get("call_timeout", 30.0)),
+            **_link(options),
         )
         assert isinstance(hw, EyeBotHardware)
         return hw
@@ -94,7 +105,7 @@ class EyeBotBackend:
 class FootBotBackend:
     """Joins a continuous world process with a ceiling as a foot-bot; a ``HardwareBackend``."""
 
-    options = frozenset({"world", "call_timeout"})
+    options = OPTIONS
 
     async def connect(
         self, node: Node, robot_id: str, spec: Mapping[str, Any], **options: Any
@@ -106,8 +117,7 @@ class FootBotBackend:
             robot_id,
             FOOTBOT,
             spec,
-            world=str(options.get("world", "world")),
-            call_timeout=float(options.get("call_timeout", 30.0)),
+            **_link(options),
         )
         assert isinstance(hw, FootBotHardware)
         return hw
