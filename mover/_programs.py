@@ -73,7 +73,7 @@ class RunTeam(TaskTeam):
         timed = {"t": self.clock.now()} if self.clock is not None and self.simulated else {}
         await self.node.broadcast(
             f"{PROGRESS_TOPIC}/{self.run}",
-            {"member": self.me, "phase": phase, **timed, **info},
+            {"member": self.me, "phase": phase, **info, **({} if "t" in info else timed)},
             reliable=True,
         )
 

@@ -19,13 +19,18 @@ import argparse
 import datetime
 import ipaddress
 import json
+import os
 import signal
+import sys
 import threading
 from pathlib import Path
 from typing import Any
 
 from ._config import NodeConfig, _read_overrides
 from ._keys import check_name
+
+CLOSE_BOUND = 10.0
+"""Seconds a stopping router may take to close its session before it exits anyway."""
 
 # Every message kind a team member needs on the team's keys.
 _TEAM_MESSAGES = [
@@ -117,6 +122,16 @@ def serve(config: NodeConfig) -> None:
             flush=True,
         )
         stop.wait()
+        # Closing waits on zenoh's links; bounded, so that a stop never hangs (a test saw a
+        # router outlive its SIGTERM for two minutes on a loaded machine, once).
+        watchdog = threading.Timer(CLOSE_BOUND, _exit_now)
+        watchdog.daemon = True
+        watchdog.start()
+
+
+def _exit_now() -> None:
+    print(f"router: closing took over {CLOSE_BOUND:g} s: exiting", file=sys.stderr, flush=True)
+    os._exit(0)
 
 
 def generate_config(

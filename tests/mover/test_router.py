@@ -54,4 +54,9 @@ async def test_members_talk_through_a_secured_router_and_outsiders_cannot_connec
                 pass
     finally:
         router.terminate()
-        await router.wait()
+        try:
+            await asyncio.wait_for(router.wait(), 20)  # it closes within its own bound (10 s)
+        except TimeoutError:
+            router.kill()
+            await router.wait()
+            raise
