@@ -44,6 +44,11 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser.add_argument(
         "--duration", type=float, default=3000.0, help="simulated seconds a run (default 3000)"
     )
+    parser.add_argument(
+        "--saved",
+        action="store_true",
+        help="report the saved runs only (at most --runs a point), making none",
+    )
     add_saved_arguments(parser, "results/eyebot/runs")
     add_figure_arguments(parser)
     parser.set_defaults(func=run)
@@ -59,6 +64,8 @@ def settings(args: argparse.Namespace) -> EyebotSettings:
     if not (math.isfinite(args.duration) and 10.0 <= args.duration <= MAX_DURATION):
         raise UsageError(f"--duration must be from 10 to {MAX_DURATION:g} s, got {args.duration}")
     save = None if args.no_save else args.save
+    if args.saved and save is None:
+        raise UsageError("--saved reports the saved runs: it cannot go with --no-save")
     if save is not None and args.duration != 3000.0:  # runs of other lengths are kept apart
         save = save.with_name(f"{save.name}-duration={args.duration:g}")
     return EyebotSettings(
@@ -69,6 +76,7 @@ def settings(args: argparse.Namespace) -> EyebotSettings:
         workers=args.workers,
         save=save,
         progress=not args.quiet,
+        saved_only=args.saved,
     )
 
 
@@ -79,6 +87,8 @@ def run(args: argparse.Namespace) -> int:
     print(f"figures: {','.join(s.figures)}  runs per point: {s.runs}  duration: {s.duration:g} s")
     if s.save is not None:
         print(f"runs saved in: {s.save}")
+    if s.saved_only:
+        print("saved runs only (--saved): the tables count the runs each point has")
     everything = []
     for figure in s.figures:
         t0 = time.monotonic()

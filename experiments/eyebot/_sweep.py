@@ -58,6 +58,7 @@ class EyebotSettings:
     workers: int = 2
     save: Path | None = None
     progress: bool = True
+    saved_only: bool = False  # report the saved runs, make none
 
 
 def points(figure: str) -> list[Point]:
@@ -126,6 +127,8 @@ def run_points(
     save = s.save
     have = {p: load_runs(None if save is None else save / f"{p.name}.jsonl", s.seed) for p in pts}
     jobs = [(s, p, k) for p in pts for k in range(s.runs) if k not in have[p]]
+    if s.saved_only:
+        jobs = []
     records = [r for p in pts for k, r in sorted(have[p].items()) if k < s.runs]
     t0 = time.monotonic()
     fresh = run_pool(

@@ -43,6 +43,10 @@ def test_the_runner_prints_tables_saves_runs_and_adds_to_them(
         return sorted(json.loads(out.splitlines()[-1])["runs"], key=lambda r: str(r["point"]))
 
     assert runs(first) == runs(again)
+    # --saved reports what is saved and makes none, however many runs are asked for
+    assert run(_parse(*[a if a != "1" else "5" for a in argv], "--saved")) == 0
+    saved = capsys.readouterr().out
+    assert "fig2: 0 runs made" in saved and runs(saved) == runs(first)
     assert run(_parse(*[a if a != "1" else "2" for a in argv])) == 0
     assert "fig2: 12 runs made" in capsys.readouterr().out
 
@@ -54,6 +58,7 @@ def test_the_runner_prints_tables_saves_runs_and_adds_to_them(
         (["--workers", "0"], "--workers must be from 1"),
         (["--duration", "nan"], "--duration must be from 10"),
         (["--duration", "1e9"], "--duration must be from 10"),
+        (["--saved", "--no-save"], "cannot go with --no-save"),
     ],
 )
 def test_bad_settings_are_one_line_errors(argv: list[str], message: str) -> None:
