@@ -10,8 +10,9 @@ What the door owns:
   tick the door waits for ``expect`` robots: a stepper that ``admits_early`` (the pymunk world)
   puts each in the world at once and re-creates them all in id order when the last expected one
   is in (:meth:`Stepper.start`); the others (the grid) hold every join until then and place
-  them all in id order. A repeated join (a retry whose reply was lost) gets the same, shielded
-  answer.
+  them all in id order. Either way every join is answered at the start, with the readings
+  after it, whatever order the joins came in (over a network they race). A repeated join (a
+  retry whose reply was lost) gets the same, shielded answer.
 * **ticks** — in lock-step the world advances only when every robot in it that is not idle has
   handed in its command for the tick; commands are applied in id order. The first command a
   robot hands in for a tick is the one used: a later one for the same tick, or one for a tick
@@ -164,6 +165,8 @@ class LockstepDoor(Generic[S]):
         self.on_tick: list[Callable[[Mapping[str, Command]], None]] = []
         self._started = expect <= 0
         self._joins: dict[str, tuple[Any, asyncio.Future[dict[str, Any]]]] = {}
+        # admitted early (before the start): answered at the start, with the readings then
+        self._early: dict[str, asyncio.Future[dict[str, Any]]] = {}
         self._commands: dict[str, dict[str, Any]] = {}
         self._idle: dict[str, dict[str, Any]] = {}  # idle robot -> its standing command
         self._waiters: dict[str, asyncio.Future[Readings]] = {}
@@ -196,6 +199,8 @@ class LockstepDoor(Generic[S]):
         """Add ``robot``; returns ``{"spec", "readings"}`` once it is in the world."""
         if robot in self._joins:  # a repeated join (a retry): the same answer
             return await asyncio.shield(self._joins[robot][1])
+        if robot in self._early:
+            return await asyncio.shield(self._early[robot])
         st = self.stepper
         if robot in st.robots():
             return {"spec": st.spec_of(robot), "readings": self._current(robot)}
@@ -382,7 +387,8 @@ class LockstepDoor(Generic[S]):
     def _start(self) -> None:
         self._started = True
         self.stepper.start()
-        self._admit_now()
+        early, self._early = self._early, {}
+        self._resolve([*early.items(), *self._admit()])
         if self.turns == "sequential":
             return
         self._maybe_step()
@@ -407,7 +413,11 @@ class LockstepDoor(Generic[S]):
         return admitted
 
     def _admit_now(self) -> None:
-        self._resolve(self._admit())
+        admitted = self._admit()
+        if self._started:
+            self._resolve(admitted)
+        else:  # in the world already, but its first readings are those at the start
+            self._early.update(admitted)
 
     def _resolve(self, admitted: list[tuple[str, asyncio.Future[dict[str, Any]]]]) -> None:
         if admitted:
@@ -463,6 +473,9 @@ class LockstepDoor(Generic[S]):
         joining = self._joins.pop(robot, None)
         if joining is not None and not joining[1].done():
             joining[1].cancel()
+        early = self._early.pop(robot, None)
+        if early is not None and not early.done():
+            early.cancel()
         for seen in self._watchers.pop(robot, []):
             seen(None)
 

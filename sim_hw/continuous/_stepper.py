@@ -3,8 +3,8 @@
 :class:`WorldStepper` adapts a :class:`World` to the door's stepper protocol
 (``sim_hw._lockstep``): robots are in the world as soon as they join (``admits_early``) and
 are re-created in id order when the expected ones are in, so that the run does not depend on
-the order they came in — their first readings (from the join) may, so a deterministic robot
-ticks once before its first decision. A world with eye-bots is served by the two-layer
+the order they came in; the door answers their joins then, with the readings after the
+re-creation (the same whatever the order). A world with eye-bots is served by the two-layer
 stepper of ``_skyworld`` (:func:`stepper_for`).
 """
 

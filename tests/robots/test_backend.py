@@ -3,6 +3,7 @@ checked and passed through, and each offers the procedures of its own hardware."
 
 from __future__ import annotations
 
+import asyncio
 from importlib.metadata import EntryPoint
 from typing import Any
 
@@ -128,8 +129,9 @@ def test_backend_options_come_from_world_and_option() -> None:
 
 async def test_body_procedures_sense_the_devices_there_are() -> None:
     server = WorldServer(World(WorldSpec()), expect=2)
-    full = await in_process(server, "full")
-    bare = await in_process(server, "bare", {"sonar": False, "camera": False})
+    full, bare = await asyncio.gather(
+        in_process(server, "full"), in_process(server, "bare", {"sonar": False, "camera": False})
+    )
     assert Robot("full", full).hw is full  # a bare Robot is Robot[Hardware]
     procs = body_procedures(full)
     assert set(procs) == {"robot.pose", "robot.stop", "robot.sense"}

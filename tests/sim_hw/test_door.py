@@ -103,11 +103,13 @@ async def test_sequential_turns_skip_idle_robots() -> None:
 
 async def test_joins_wait_for_expect_even_when_those_in_are_idle() -> None:
     server = WorldServer(World(random_obstacles((6.0, 6.0), 0)), expect=2)
-    await server.join("a")  # the pymunk world admits early
-    server.idle("a", {"v": 0.0, "w": 0.0, "push": None})
-    assert server.status()["started"] is False
+    joining = asyncio.ensure_future(server.join("a"))  # the pymunk world admits early
+    await asyncio.sleep(0)
+    server.idle("a", {"v": 0.0, "w": 0.0, "push": None})  # (its join is answered at the start)
+    assert server.status()["started"] is False and not joining.done()
     await server.join("b")
     assert server.status()["started"] is True
+    await asyncio.wait_for(joining, 1)
     for n in range(5):
         await asyncio.wait_for(server.step("b", n, {"v": 0.2, "w": 0.0}), 1)
     assert server.world.tick == 5 and server.world.robots["a"].v == 0.0

@@ -95,8 +95,7 @@ async def test_an_idle_robot_holds_nothing_back_and_reads_the_frames() -> None:
 
 async def test_a_call_the_world_answers_late_is_asked_again() -> None:
     async with _team(2, "a", "b", frames=False) as (server, _, a, b):
-        ha = await remote(a, "a", call_timeout=0.3)
-        hb = await remote(b, "b")
+        ha, hb = await asyncio.gather(remote(a, "a", call_timeout=0.3), remote(b, "b"))
         ticking = asyncio.ensure_future(_ticks(ha, 1))  # waits on b, longer than 0.3 s
         await asyncio.sleep(1.0)
         assert not ticking.done() and server.dropped == []

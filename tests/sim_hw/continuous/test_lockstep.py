@@ -5,6 +5,7 @@ from __future__ import annotations
 import asyncio
 import logging
 import time
+from typing import Any
 
 import numpy as np
 import pytest
@@ -53,18 +54,31 @@ async def test_a_silent_robot_is_dropped(caplog: pytest.LogCaptureFixture) -> No
     await server.aclose()
 
 
-async def test_joins_return_at_once_and_the_clock_waits_for_all() -> None:
+async def test_joins_are_answered_at_the_start_with_the_readings_then() -> None:
     server = WorldServer(World(random_obstacles((6.0, 6.0), 0)), expect=2)
-    first = await in_process(server, "b")  # returns before "a" has joined
-    ticking = asyncio.ensure_future(first.clock.tick())
+    first = asyncio.ensure_future(in_process(server, "b"))  # in the world, not answered yet
     await asyncio.sleep(0.05)
-    assert not ticking.done()
-    assert server.world.tick == 0
+    assert not first.done() and list(server.world.robots) == ["b"]
     second = await in_process(server, "a")
-    await asyncio.gather(ticking, second.clock.tick())
-    assert server.world.tick == 1
+    b = await asyncio.wait_for(first, 1)
     assert list(server.world.robots) == ["a", "b"]  # re-created in id order
+    # b's first readings are those after the start (a re-created beside it), not at its join
+    assert b.sonar.ranges() == tuple(server.world.readings("b")["sonar"])
+    await asyncio.gather(b.clock.tick(), second.clock.tick())
+    assert server.world.tick == 1
     await server.aclose()
+
+
+async def test_the_first_readings_do_not_depend_on_the_order_of_the_joins() -> None:
+    async def first_readings(order: str) -> dict[str, Any]:
+        server = WorldServer(World(random_obstacles((6.0, 6.0), 4), seed=3), expect=2)
+        joins = {n: asyncio.ensure_future(in_process(server, n)) for n in order}  # in order
+        hws = {n: await asyncio.wait_for(j, 1) for n, j in joins.items()}
+        seen = {n: (hw.sonar.ranges(), hw.odometry.pose()) for n, hw in sorted(hws.items())}
+        await server.aclose()
+        return seen
+
+    assert await first_readings("ab") == await first_readings("ba")
 
 
 async def test_a_dropped_robot_is_told() -> None:
