@@ -86,6 +86,11 @@ def register_run(sub: Sub) -> None:
         help="run beside runs under way that were started with --share too",
     )
     p.add_argument(
+        "--survivors",
+        action="store_true",
+        help="a member lost during a step does not fail the run: the others go on without it",
+    )
+    p.add_argument(
         "--attach",
         metavar="RUN",
         type=member_name,
@@ -181,6 +186,7 @@ async def _run(
                 wait=False,
                 seed=args.seed,
                 share=args.share,
+                policy="survivors" if args.survivors else "fail",
             )
             # said once every member has started it: from now on they know the run
             print(f"run {run}: {args.program} on {', '.join(members)}", flush=True)

@@ -47,7 +47,8 @@ class Collectives:
 
     def __init__(self, node: Node, policy: Policy = "fail") -> None:
         self.node = node
-        self.policy = policy
+        self.policy = policy  # for runs not given their own (:meth:`set_policy`)
+        self._policies: dict[str, Policy] = {}  # run -> its policy, the latest _STEP_MEMORY runs
         self._steps: dict[tuple[str, int], _Step] = {}
         # OR decisions as announced by designated members (one broadcast per step)
         self._heard: dict[tuple[str, int], asyncio.Future[Decision]] = {}
@@ -192,6 +193,16 @@ class Collectives:
             if not future.done():
                 future.set_result(None)
 
+    def set_policy(self, run: str, policy: Policy) -> None:
+        """Run ``run``'s steps follow ``policy`` (every member of it is started with the same)."""
+        self._policies[run] = policy
+        while len(self._policies) > _STEP_MEMORY:
+            del self._policies[next(iter(self._policies))]
+
+    def _fails(self, state: _Step) -> bool:
+        """Whether a lost member fails ``state``'s step (policy ``fail``)."""
+        return self._policies.get(state.run, self.policy) == "fail"
+
     def end_run(self, run: str) -> None:
         """Run ``run`` ended here: questions about its steps are answered "out" from now on."""
         self._ended.append(run)
@@ -291,7 +302,7 @@ class Collectives:
         if state.takeover:
             if not self._expected(state) <= state.joined:
                 return  # a successor decides only once every live member has said what it knows
-            if state.lost and self.policy == "fail":
+            if state.lost and self._fails(state):
                 state.decision.set_result(Decision("lost", lost=tuple(state.lost)))
                 return
         if not state.claims:
@@ -344,11 +355,11 @@ class Collectives:
     def _maybe_complete(self, state: _Step) -> None:
         if state.decision.done():
             return
-        if state.lost and self.policy == "fail":
+        if state.lost and self._fails(state):
             state.decision.set_result(Decision("lost", lost=tuple(state.lost)))
             return
         expected = self._expected(state) | state.results.keys() & state.members
-        if self.policy == "fail" and not state.members <= expected:
+        if self._fails(state) and not state.members <= expected:
             return  # _member_left decides the failure
         if expected and expected <= state.results.keys():
             results = {m: state.results[m] for m in sorted(expected)}
@@ -364,7 +375,7 @@ class Collectives:
             alive = self._expected(state)
             if not alive:
                 state.decision.set_result(Decision("lost", lost=tuple(sorted(state.members))))
-            elif self.policy == "fail" and name not in state.results:
+            elif self._fails(state) and name not in state.results:
                 state.decision.set_result(Decision("lost", lost=(name,)))
             else:
                 self._maybe_decide(state)

@@ -45,6 +45,7 @@ from ._exceptions import (
     UnknownRobot,
 )
 from ._signature import Signature
+from ._steps import POLICIES
 from ._tasks import SEED_LIMIT, Collectives, Policy, RunClock, TaskTeam, wait_reachable
 
 if TYPE_CHECKING:
@@ -154,11 +155,14 @@ class ProgramHost:
         args: dict[str, Any],
         seed: int | None = None,
         share: bool = False,
+        policy: str = "fail",
     ) -> None:
         """Start ``program`` as run ``run`` among ``members`` (returns once started).
 
         ``seed`` seeds the team's random choices (:meth:`TaskTeam.rng`; default: derived from
         ``run``). A host busy in a run refuses another unless both are started with ``share``.
+        ``policy`` says what a member lost in a step does to it: ``fail`` it (MemberLost), or
+        let the ``survivors`` go on without it.
         """
         fn = self.programs.get(program)
         if fn is None:
@@ -172,6 +176,8 @@ class ProgramHost:
             raise BadArguments(f"{self.node.name!r} is not among the members {members!r}")
         if seed is not None and not 0 <= seed < SEED_LIMIT:
             raise BadArguments(f"seed must be at least 0 and below 2**63, got {seed}")
+        if policy not in POLICIES:
+            raise BadArguments(f"policy must be one of {', '.join(POLICIES)}, got {policy!r}")
         busy = [e for e in self.runs.values() if not e.task.done()]
         if busy and not (share and all(e.share for e in busy)):
             other = busy[0]
@@ -189,6 +195,7 @@ class ProgramHost:
             positional, kwargs = self._signatures[program].bind([], args)
         except TypeError as exc:
             raise BadArguments(f"program {program!r}: {exc}") from None
+        self.collectives.set_policy(run, policy)
         team = RunTeam(self.node, run, members, collectives=self.collectives, seed=seed)
         team.info = {}
         task = asyncio.get_running_loop().create_task(
@@ -355,17 +362,22 @@ async def launch(
     wait: bool = True,
     seed: int | None = None,
     share: bool = False,
+    policy: Policy = "fail",
 ) -> dict[str, dict[str, Any]]:
     """Start ``program`` on every one of ``members``; with ``wait``, return each one's outcome.
 
     ``seed`` seeds the run's random choices (default: derived from ``run``); ``share`` lets it
-    run beside runs under way that were started with ``share`` too. Raises the first CallError
+    run beside runs under way that were started with ``share`` too; ``policy`` is what a member
+    lost during a step does: ``fail`` the step (MemberLost) or leave the ``survivors`` to go on
+    without it (its result missing from an AND's). Raises the first CallError
     of a start that fails (unknown program, bad arguments, refused: a member busy in another
     run); the members that did start are then cancelled.
     """
     starts = await asyncio.gather(
         *(
-            node.call(m, "mover.start", program, run, members, args, seed, share, timeout=10)
+            node.call(
+                m, "mover.start", program, run, members, args, seed, share, policy, timeout=10
+            )
             for m in members
         ),
         return_exceptions=True,

@@ -23,6 +23,7 @@ if TYPE_CHECKING:
 log = logging.getLogger("mover.tasks")
 
 Policy = Literal["fail", "survivors"]
+POLICIES: tuple[Policy, ...] = ("fail", "survivors")
 
 _STEP_MEMORY = 512  # finished steps a designated member remembers (for late re-sends)
 DECIDED_TOPIC = "mover/decided"

@@ -11,7 +11,9 @@ the time until the first foot-bot reaches the target, ``t_a`` the mean duration 
 after each foot-bot's first.
 
 Every random choice comes from ``team.rng`` (the run's seed): run it again with the same seed
-on a lock-step world and it repeats.
+on a lock-step world and it repeats. Launched with the ``survivors`` policy (the shipped team
+file is), a member whose process dies mid-run is left out: the others finish, and the figures
+are those of the foot-bots that remain (``lost`` names the members that did not).
 """
 
 from __future__ import annotations
@@ -55,7 +57,8 @@ async def stigmergic_navigation(
 
     ``period`` is the eye-bots' time step, ``c_a``, ``c_m``, ``q`` their learning (eq. 1; the
     paper's section 5), ``d`` and ``speed`` the foot-bots' leg length and speed. Returns the
-    team's figures (``t_1``, ``t_a``, ``t_a_all``, ``trips``, seconds after the start) and this
+    team's figures (``t_1``, ``t_a``, ``t_a_all``, ``trips``, seconds after the start; ``lost``
+    the members gone before the end) and this
     member's own result (``me``: an eye-bot's policies, a foot-bot's trips as
     ``[goal, start, end]`` in simulated seconds).
     """
@@ -85,9 +88,13 @@ async def stigmergic_navigation(
         start,
     )
     feet = figures["footbots"]
-    await team.report("done", t_1=figures["t_1"], t_a=figures["t_a"], trips=figures["trips"])
+    lost = sorted(set(team.members) - everyone.keys())  # launched with survivors: gone mid-run
+    await team.report(
+        "done", t_1=figures["t_1"], t_a=figures["t_a"], trips=figures["trips"], lost=lost
+    )
     return {
         **figures,
+        "lost": lost,
         "start": start,
         "duration": duration,
         "wall_s": wall,

@@ -318,10 +318,18 @@ class Supervisor:
     async def launch(
         self, program: str, members: list[str], args: dict[str, Any], *, run: str
     ) -> dict[str, dict[str, Any]]:
-        """:func:`mover.launch` with the run's program seed and the file's ``share``."""
-        share = self.plan.program is not None and self.plan.program.share
+        """:func:`mover.launch` with the run's program seed and the file's ``share`` and
+        ``survivors``."""
+        p = self.plan.program
         return await launch(
-            self.node, program, members, args, run=run, seed=self.seeds.program, share=share
+            self.node,
+            program,
+            members,
+            args,
+            run=run,
+            seed=self.seeds.program,
+            share=p is not None and p.share,
+            policy="survivors" if p is not None and p.survivors else "fail",
         )
 
     async def run_program(self) -> bool:

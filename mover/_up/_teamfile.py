@@ -92,6 +92,7 @@ class ProgramPlan:
     run: str = ""  # "": the program's name
     seed: int | None = None  # None: derived from the run seed
     share: bool = False
+    survivors: bool = False  # a member lost in a step does not fail the run
 
 
 @dataclass(frozen=True)
@@ -317,7 +318,7 @@ def _poses(g: _Table, n: int) -> list[tuple[float, float, float]]:
 
 
 def _program(t: _Table, members: list[MemberPlan]) -> ProgramPlan:
-    t.only(("name", "args", "members", "run", "seed", "share"))
+    t.only(("name", "args", "members", "run", "seed", "share", "survivors"))
     name = t.name("name", required=True) or ""
     listed = t.get("members")
     chosen: tuple[str, ...] = ()
@@ -338,6 +339,7 @@ def _program(t: _Table, members: list[MemberPlan]) -> ProgramPlan:
         run=t.name("run") or name,
         seed=t.integer("seed", high=MAX_SEED),
         share=bool(t.boolean("share")),
+        survivors=bool(t.boolean("survivors")),
     )
 
 

@@ -18,7 +18,7 @@ from typing import Any
 
 import pytest
 
-from mover import Node, Refused, TaskTeam, launch
+from mover import BadArguments, Node, Refused, TaskTeam, launch
 from mover._programs import outcomes
 from mover._tasks import seed_of
 from tests.helpers.procs import ROOT, Cluster, cluster
@@ -107,6 +107,8 @@ async def test_busy_refusal_share_and_cancel(tmp_path: Path) -> None:
         await launch(node, "hold", ["a"], marks, run="r1", wait=False)
         await wait_phase(node, "a", "r1", "holding")
 
+        with pytest.raises(BadArguments, match="policy must be one of fail, survivors"):
+            await launch(node, "pause", ["b"], {}, run="rp", policy="maybe")  # type: ignore[arg-type]
         with pytest.raises(Refused, match=r"busy in run 'r1'.*share") as refused:
             await launch(node, "pause", ["a", "b"], {"seconds": 0.1}, run="r2")
         print(f"\nrefused: {refused.value}")

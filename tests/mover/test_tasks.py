@@ -118,6 +118,25 @@ async def test_a_member_leaving_during_and_fails_the_step_or_is_survived(
         assert outs == [{"n0": "n0", "n1": "n1", "n2": "n2"}] * 3
 
 
+async def test_a_run_of_its_own_policy_survives_on_a_node_that_fails_by_default(
+    nodes: list[Node],
+) -> None:
+    ts = teams(nodes[:3], run="own")  # the nodes' default policy: fail
+    for t in ts:
+        t.collectives.set_policy("own", "survivors")  # as mover.start sets a launch's policy
+
+    async def op(t: TaskTeam) -> str:
+        await asyncio.sleep(3600 if t.me == "n2" else 0.01)
+        return t.me
+
+    tasks = [asyncio.ensure_future(t.distributed_and(lambda t=t: op(t))) for t in ts]
+    await asyncio.sleep(0.2)
+    tasks[2].cancel()
+    await nodes[2].close()
+    outs = [await asyncio.wait_for(task, 1.0) for task in tasks[:2]]
+    assert outs == [{"n0": "n0", "n1": "n1"}] * 2
+
+
 async def test_a_long_or_step_costs_2n_messages(nodes: list[Node]) -> None:
     """Members that ask for the decision get it in the answer: no announcement is sent."""
     ts = teams(nodes)

@@ -42,6 +42,7 @@ names = ["desk"]
 [program]
 name = "hello_team"
 args = { range = 2.5 }
+survivors = true
 """
 
 
@@ -61,6 +62,7 @@ def test_a_good_file_plans_its_processes(tmp_path: Path) -> None:
     assert r2.spec == {"radius": 0.2, "pose": [1.5, 1.0, 90.0]} and r2.world == "world"
     assert plan.members[3].required and not plan.members[0].required
     assert plan.members[4].hardware == "none" and plan.members[4].kind == "workstation"
+    assert plan.program is not None and plan.program.survivors and not plan.program.share
     s = seeds(plan)
     assert (s.run, s.world, s.program) == (7, derive(7, "world"), derive(7, "program"))
     assert seeds(plan, 8).world != s.world  # the command line's seed wins

@@ -2,7 +2,8 @@
 11 eye-bots and 5 foot-bots (16 members: a router) brought up by ``mover up`` on a lock-step
 world with a ceiling, the program launched for a short run. Every foot-bot process navigates
 and records its trips in simulated time, the eye-bots learn from what they see, and every
-member reports the same figures.
+member reports the same figures. A foot-bot and an eye-bot killed mid-run (the run launched
+with the ``survivors`` policy) are left out: the others finish and agree on the figures.
 
 The run starts the foot-bots a metre from the target area (in a copy of the shipped world) so
 that trips happen within the 80 simulated seconds of the test; the long run that shows
@@ -14,6 +15,8 @@ from __future__ import annotations
 import asyncio
 import json
 import math
+import os
+import signal
 import tomllib
 from pathlib import Path
 from typing import Any
@@ -90,3 +93,46 @@ async def test_eye_bots_and_foot_bots_as_robot_processes_navigate_and_learn(
         learned.append(not uniform)
         assert uniform or policy["seen"] > 0
     assert sum(learned) >= 2  # at least the eye-bots over the start and over the target
+
+
+@pytest.mark.timeout(150)
+async def test_a_foot_bot_and_an_eye_bot_killed_mid_run_are_left_out(
+    mover_up: Any, tmp_path: Path
+) -> None:
+    path, eyes, feet = _files(tmp_path)
+    up = await mover_up(str(path))
+    members = eyes + feet
+    running = asyncio.ensure_future(
+        launch(
+            up.node,
+            "stigmergic_navigation",
+            members,
+            {"duration": DURATION},
+            run="k",
+            seed=3,
+            policy="survivors",
+        )
+    )
+    async with asyncio.timeout(60):  # until the run is under way: 20 simulated seconds in
+        while (await up.node.call("world", "status", timeout=5))["tick"] < 200:
+            await asyncio.sleep(0.1)
+    victims = sorted([feet[1], eyes[4]])
+    for victim in victims:
+        info = up.node.team.info(victim)
+        assert info is not None
+        os.kill(info.pid, signal.SIGKILL)
+    outcomes = await asyncio.wait_for(running, 120)
+    for victim in victims:
+        assert "error" in outcomes[victim] and outcomes[victim].get("result") is None
+    results = {m: outcomes[m].get("result") for m in members if m not in victims}
+    assert all(r is not None for r in results.values()), outcomes
+    kept = ("t_1", "t_a", "trips", "lost")
+    assert len({json.dumps({k: r[k] for k in kept}) for r in results.values()}) == 1
+    first = results[feet[0]]
+    assert first["lost"] == victims and first["footbots"] == len(feet) - 1
+    status = await up.node.call("world", "status", timeout=5)
+    assert sorted(status["dropped"]) == victims  # the world went on without them
+    print(
+        f"\n{victims} killed at tick 200: the {len(results)} others finished, "
+        f"{first['trips']} trips, t_1 {first['t_1']}"
+    )
