@@ -157,8 +157,8 @@ def parse_team(text: str, path: Path) -> TeamPlan:
     program = root.table("program")
     pplan = _program(program, members) if program is not None else None
     if wplan is not None and wplan.expect is None and wplan.lockstep:
-        joining = HARDWARE_OF[wplan.kind]
-        expect = sum(m.hardware == joining and m.world == wplan.name for m in members)
+        # every robot the file points at this world joins it, whatever its kind's backend
+        expect = sum(m.hardware != "none" and m.world == wplan.name for m in members)
         wplan = replace(wplan, expect=expect)
     return replace(plan, world=wplan, members=tuple(members), program=pplan)
 

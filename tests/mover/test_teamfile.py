@@ -222,6 +222,14 @@ def test_the_demo_team_file_checks() -> None:
     assert plan.program is not None and plan.program.name == "search_and_rescue"
 
 
+def test_a_world_expects_every_robot_pointed_at_it_whatever_its_backend() -> None:
+    plan = load_team(ROOT / "teams" / "stigmergic_navigation.toml")  # no expect in the file
+    kinds = {m.hardware for m in plan.members}
+    assert kinds == {"eyebot", "footbot"} and len(plan.members) == 16
+    assert plan.world is not None and plan.world.expect == 16
+    assert plan.program is not None and plan.program.survivors
+
+
 def test_check_prints_the_plan_and_starts_nothing(tmp_path: Path) -> None:
     (tmp_path / "t.toml").write_text(GOOD)
     done = subprocess.run(
