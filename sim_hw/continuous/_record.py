@@ -63,6 +63,8 @@ def scene_header(world: World) -> dict[str, Any]:
         "immovables": [asdict(i) for i in spec.immovables],
         "markers": [asdict(m) for m in spec.markers],
         "radii": radii,
+        "eyebots": [asdict(e) for e in spec.eyebots],
+        "areas": [asdict(a) for a in spec.areas],
     }
 
 

@@ -45,6 +45,8 @@ MAX_LABELS = 2000
 """Floor values labelled at most per grid frame (a larger floor is drawn without them)."""
 
 GREY, DARK, WALL = (115, 115, 115), (50, 50, 50), (20, 20, 20)
+EYEBOT = (70, 110, 200)
+AREA_COLOURS = {"source": (40, 160, 60), "target": (200, 30, 30)}
 
 
 def rgb(colour: str) -> tuple[int, int, int]:
@@ -212,6 +214,62 @@ class Drawing:
                     True,
                 )
             )
+        return out + self._ceiling()
+
+    def _ceiling(self) -> list[Entity]:
+        """The source and target areas, and the eye-bots on the ceiling: each one's disc of
+        view on the floor, and its reference direction θ0 (a red stroke from the centre)."""
+        out: list[Entity] = []
+        h = self.header
+        areas = h.get("areas") or []
+        if areas:
+            strips = [[self.xy(*p) for p in circle(a["center"], a["radius"])] for a in areas]
+            out.append(
+                (
+                    "areas",
+                    rr.LineStrips2D(
+                        strips,
+                        radii=0.03,
+                        colors=[AREA_COLOURS.get(a["id"], GREY) for a in areas],
+                        labels=[a["id"] for a in areas],
+                        draw_order=1.5,
+                    ),
+                    True,
+                )
+            )
+        eyes = h.get("eyebots") or []
+        if not eyes:
+            return out
+        views = [[self.xy(*p) for p in circle(e["center"], e["view"])] for e in eyes]
+        out.append(
+            (
+                "eyebots/view",
+                rr.LineStrips2D(views, radii=0.01, colors=EYEBOT, draw_order=1.6),
+                True,
+            )
+        )
+        out.append(
+            (
+                "eyebots/theta0",
+                rr.LineStrips2D(
+                    [
+                        [
+                            self.xy(*e["center"]),
+                            self.xy(
+                                e["center"][0] + 0.3 * math.cos(e["heading"]),
+                                e["center"][1] + 0.3 * math.sin(e["heading"]),
+                            ),
+                        ]
+                        for e in eyes
+                    ],
+                    radii=0.02,
+                    colors=(220, 40, 40),
+                    labels=[e["id"] for e in eyes],
+                    draw_order=6.0,
+                ),
+                True,
+            )
+        )
         return out
 
     def _discs(

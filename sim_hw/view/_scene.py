@@ -7,9 +7,10 @@ nothing until a viewer calls them.
 
 * ``view.scene()`` — the static scene. The pymunk world answers with its recording header
   (``sim_hw.continuous._record.scene_header``: arena size, obstacles, boxes, immovables,
-  markers, robot radii) and ``"kind": "continuous"``, so that a live view and a replay draw
-  from the same description; a grid world answers with ``"kind": "grid"``, its shape, its
-  obstacle rows (``#`` and ``.``) and its base cell.
+  markers, robot radii, eye-bots on the ceiling and floor areas) and ``"kind":
+  "continuous"``, so that a live view and a replay draw from the same description; a grid
+  world answers with ``"kind": "grid"``, its shape, its obstacle rows (``#`` and ``.``) and
+  its base cell.
 * ``view.frame()`` — a grid world's state now: round, each robot's cell, the floor values
   (``-1`` unmarked), colours, resources and the cells seen. A grid world streams no state, and
   a viewer polling at a few hertz costs the world one small answer each time.

@@ -75,6 +75,22 @@ def test_the_static_scene_draws_circles_as_circles_and_boxes_as_outlines() -> No
     assert arena[:3] == [[0.0, 0.0], [4.0, 0.0], [4.0, 3.0]]
 
 
+def test_the_ceiling_draws_eye_bots_views_their_theta0_and_the_areas() -> None:
+    assert not any(p.startswith(("eyebots", "areas")) for p in _by_path(Drawing(HEADER).scene()))
+    header = {
+        **HEADER,
+        "eyebots": [{"id": "e1", "center": [1.0, 1.0], "heading": math.pi / 2, "view": 0.5}],
+        "areas": [{"id": "source", "center": [0.5, 0.5], "radius": 0.4}],
+    }
+    scene = _by_path(Drawing(header).scene())
+    (view,) = _strips(scene["eyebots/view"][0])
+    assert {round(math.dist(p, (1.0, 2.0)), 6) for p in view} == {0.5}  # its disc, y flipped
+    (theta0,) = _strips(scene["eyebots/theta0"][0])
+    assert theta0[0] == [1.0, 2.0] and theta0[1] == [pytest.approx(1.0), pytest.approx(1.7)]
+    assert scene["eyebots/theta0"][0].labels.pa_array.to_pylist() == ["e1"]
+    assert scene["areas"][0].labels.pa_array.to_pylist() == ["source"]
+
+
 def test_a_frame_draws_robots_with_heading_led_name_and_boxes() -> None:
     drawing = Drawing(HEADER)
     frame = _by_path(drawing.frame(_frame(5, (1.0, 1.0, 0.0), led="red")))
