@@ -213,8 +213,11 @@ class LockstepDoor(Generic[S]):
         elif not self._started:
             if st.admits_early:
                 self._admit_now()
-            if len(st.robots()) + len(self._joins) >= self.expect:
+            count = len(st.robots()) + len(self._joins)
+            if count >= self.expect:
                 self._start()
+            else:  # its join is answered at the start: say why it waits
+                log.info("robot %s in: %d of %d, the world starts then", robot, count, self.expect)
         elif not self._busy():  # no robot to wait for: the world is at a tick boundary
             self._admit_now()
         # shielded: a caller that gives up must not take a retry's answer down

@@ -108,9 +108,9 @@ async def interrupted_run(tmp_path_factory: pytest.TempPathFactory) -> dict[str,
     found: dict[str, Any] = {}
     async with cluster() as c, c.launcher() as node:
         await mover(c, tmp / "world.log", "world", WORLD, "--lockstep", "--expect", "3")
-        robots = {
-            name: await mover(c, tmp / f"{name}.log", "robot", "--name", name) for name in ROBOTS
-        }
+        # together: each says READY once in the world, and the world starts with all three
+        started = [mover(c, tmp / f"{name}.log", "robot", "--name", name) for name in ROBOTS]
+        robots = dict(zip(ROBOTS, await asyncio.gather(*started), strict=True))
         await node.team.wait_for(["world", *ROBOTS], timeout=30)
         run = "sr"
         launcher = await mover(
@@ -186,8 +186,9 @@ async def test_ctrl_c_of_a_lock_step_world_mid_run(tmp_path: Path) -> None:
     async with cluster() as c, c.launcher() as node:
         log = tmp_path / "world.log"
         world = await mover(c, log, "world", WORLD, "--lockstep", "--expect", "2")
-        for name in ROBOTS[1:]:
-            await mover(c, tmp_path / f"{name}.log", "robot", "--name", name)
+        await asyncio.gather(
+            *(mover(c, tmp_path / f"{name}.log", "robot", "--name", name) for name in ROBOTS[1:])
+        )
         await node.team.wait_for(["world", *ROBOTS[1:]], timeout=30)
         for m in ROBOTS[1:]:
             await node.call(m, "mover.start", "search_and_rescue", "sr", ROBOTS[1:], {}, timeout=10)
