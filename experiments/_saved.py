@@ -11,6 +11,7 @@ import argparse
 import json
 import logging
 import multiprocessing
+import signal
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, TypeVar
@@ -69,7 +70,7 @@ def run_pool(
     file ``save_to(record)`` as it comes (None: keep nothing). Returns the records made."""
     fresh: list[Record] = []
     ctx = multiprocessing.get_context("fork")
-    with ctx.Pool(max(1, workers)) as pool:
+    with ctx.Pool(max(1, workers), initializer=_worker) as pool:
         for rec in pool.imap_unordered(work, jobs, chunksize=1):
             fresh.append(rec)
             if save_to is not None:
@@ -80,3 +81,11 @@ def run_pool(
             bar.update(len(fresh), status(rec))
     bar.close(len(fresh))
     return fresh
+
+
+def _worker() -> None:
+    """A worker leaves Ctrl-C to the runner (which stops the pool) and ends at once on the
+    SIGTERM the pool stops it with: a forked worker would otherwise inherit the command's
+    handler (``mover.cli.interrupt_on_sigterm``) and print a traceback as the pool closes."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
