@@ -46,12 +46,17 @@ def _files(tmp_path: Path) -> tuple[Path, list[str], list[str]]:
     return path, [e["id"] for e in data["eyebots"]], [r["id"] for r in data["robots"]]
 
 
+async def _team(mover_up: Any, tmp_path: Path) -> tuple[Any, list[str], list[str]]:
+    """The team of :func:`_files` brought up; the eye-bots' and the foot-bots' names."""
+    path, eyes, feet = _files(tmp_path)
+    return await mover_up(str(path)), eyes, feet
+
+
 @pytest.mark.timeout(150)
 async def test_eye_bots_and_foot_bots_as_robot_processes_navigate_and_learn(
     mover_up: Any, tmp_path: Path
 ) -> None:
-    path, eyes, feet = _files(tmp_path)
-    up = await mover_up(str(path))
+    up, eyes, feet = await _team(mover_up, tmp_path)
     assert any("router" in line for line in up.lines)  # 16 members: over a peer mesh's size
     outcomes = await asyncio.wait_for(
         launch(
@@ -99,8 +104,7 @@ async def test_eye_bots_and_foot_bots_as_robot_processes_navigate_and_learn(
 async def test_a_foot_bot_and_an_eye_bot_killed_mid_run_are_left_out(
     mover_up: Any, tmp_path: Path
 ) -> None:
-    path, eyes, feet = _files(tmp_path)
-    up = await mover_up(str(path))
+    up, eyes, feet = await _team(mover_up, tmp_path)
     members = eyes + feet
     running = asyncio.ensure_future(
         launch(
