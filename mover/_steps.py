@@ -120,6 +120,14 @@ class Decision:
     results: dict[str, Any] = field(default_factory=dict)
     lost: tuple[str, ...] = ()
 
+    def lost_message(self, run: str, step: int, me: str) -> str:
+        """What a ``lost`` decision tells member ``me``: who was lost, and, if ``me`` is among
+        them (it was out of reach past its lease, a frozen process say), that it was."""
+        said = f"step {step} of run {run!r} lost {list(self.lost)}"
+        if me in self.lost:
+            said += f": this member ({me}) among them, out of the team's reach past its lease"
+        return said
+
     def to_wire(self) -> dict[str, Any]:
         """The decision as a msgpack-able map."""
         if self.kind == "won":

@@ -244,7 +244,7 @@ class TaskTeam:
     def _raise_lost(self, metrics: StepMetrics, decision: Decision) -> None:
         if decision.kind == "lost":
             raise MemberLost(
-                f"step {metrics.step} of run {self.run!r} lost {list(decision.lost)}",
+                decision.lost_message(self.run, metrics.step, self.me),
                 members=frozenset(decision.lost),
             )
 

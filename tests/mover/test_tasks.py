@@ -270,3 +270,13 @@ async def test_the_designated_member_killed_right_after_it_announced(
     t2 = TaskTeam(n2, "r", members)  # its listener starts now: the announcement is past
     late = await asyncio.wait_for(t2.distributed_or(long), 10)
     assert (late.winner, late.result) == ("n0", "n0's")
+
+
+def test_a_member_counted_lost_is_told_that_it_was() -> None:
+    from mover._steps import Decision
+
+    lost = Decision("lost", lost=("moseley",))
+    assert lost.lost_message("rescue", 1, "ernst") == "step 1 of run 'rescue' lost ['moseley']"
+    told = lost.lost_message("rescue", 1, "moseley")
+    assert told.startswith("step 1 of run 'rescue' lost ['moseley']: this member (moseley)")
+    assert "past its lease" in told
