@@ -9,6 +9,7 @@ over a :class:`RunClock`), programs (:class:`ProgramHost`, :func:`launch`, and
 private modules; the command-line helpers shared by every process are in :mod:`mover.cli`.
 """
 
+from ._clock import IdleClock
 from ._config import NodeConfig, Team, free_port
 from ._exceptions import (
     Answered,
@@ -46,6 +47,7 @@ __all__ = [
     "Collectives",
     "ConfigError",
     "FixedLocator",
+    "IdleClock",
     "Locator",
     "MemberEvent",
     "MemberInfo",
