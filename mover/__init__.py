@@ -10,6 +10,7 @@ private modules; the command-line helpers shared by every process are in :mod:`m
 """
 
 from ._clock import IdleClock
+from ._collective import Collectives, OperationFailed, Outcome, RunClock, StepMetrics, TaskTeam
 from ._config import NodeConfig, Team, free_port
 from ._exceptions import (
     Answered,
@@ -35,7 +36,6 @@ from ._node import Node
 from ._programs import PROGRESS_TOPIC, ProgramHost, RunTeam, launch
 from ._radio import FixedLocator, Locator, Message, Neighbour, RadioModel, Subscription
 from ._rpc import procedure
-from ._tasks import Collectives, OperationFailed, Outcome, RunClock, StepMetrics, TaskTeam
 from ._wire import pack, unpack
 
 __all__ = [

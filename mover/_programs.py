@@ -35,6 +35,15 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
+from ._collective import (
+    POLICIES,
+    SEED_LIMIT,
+    Collectives,
+    Policy,
+    RunClock,
+    TaskTeam,
+    wait_reachable,
+)
 from ._exceptions import (
     BadArguments,
     CallError,
@@ -45,8 +54,6 @@ from ._exceptions import (
     UnknownRobot,
 )
 from ._signature import Signature
-from ._steps import POLICIES
-from ._tasks import SEED_LIMIT, Collectives, Policy, RunClock, TaskTeam, wait_reachable
 
 if TYPE_CHECKING:
     from ._node import Node

@@ -26,7 +26,7 @@ from collections.abc import AsyncIterator, Callable, Mapping
 from importlib.metadata import EntryPoint, entry_points
 from typing import Any
 
-from mover import Node, NodeConfig, ProgramHost, Team
+from mover import Node, NodeConfig, ProgramHost, RunClock, Team
 
 from ._robot import Robot
 from .backend import BaseHardware, H, HardwareBackend, check_options
@@ -175,10 +175,10 @@ async def _connect(
             waited += 1.0
 
 
-class HostClock:
+class HostClock(RunClock):
     """A program host's run clock (``mover.RunClock``) over a robot's hardware and its idle task.
 
-    ``now`` and ``passed`` are the hardware clock's. ``release()`` starts the idle task
+    ``now``, ``passed`` and ``hold`` are the hardware clock's. ``release()`` starts the idle task
     (``async with hw.clock.idling()``, the drive stopped first); ``engage()`` ends it and returns
     once it has left ``idling()``, i.e. once the world waits for this robot's commands. Both
     may be called by concurrent runs. A HardwareLost, idle or in a run (a tick that failed, a
@@ -207,8 +207,11 @@ class HostClock:
         self._hw.clock.hold(t)
 
     @contextlib.asynccontextmanager
-    async def waiting(self) -> AsyncIterator[None]:
-        """Idle for the block (a collective waiting for the others), engaged again after."""
+    async def idling(self) -> AsyncIterator[None]:
+        """Idle for the block (a collective waiting for the others), engaged again after.
+
+        Blocks of concurrent runs nest: the first releases, the last engages. Entering starts
+        the idle task and does not wait for the world to acknowledge it (leaving does)."""
         self._waits += 1
         if self._waits == 1:
             self.release()

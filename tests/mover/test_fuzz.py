@@ -19,7 +19,7 @@ from pathlib import Path
 import pytest
 
 from mover import Node
-from mover._tasks import DECIDED_TOPIC
+from mover._collective._step import DECIDED_TOPIC
 from mover._wire import pack
 from tests.helpers.procs import ROOT, cluster
 

@@ -19,8 +19,8 @@ from typing import Any
 import pytest
 
 from mover import BadArguments, Node, Refused, TaskTeam, launch
+from mover._collective import seed_of
 from mover._programs import outcomes
-from mover._tasks import seed_of
 from tests.helpers.procs import ROOT, Cluster, cluster
 
 MEMBER = "tests.mover._run_member"
@@ -252,7 +252,7 @@ class CountingClock:
         self.held = t
 
     @contextlib.asynccontextmanager
-    async def waiting(self) -> AsyncIterator[None]:
+    async def idling(self) -> AsyncIterator[None]:
         yield
 
     async def engage(self) -> None:

@@ -78,7 +78,7 @@ class FakeClock:
         self.held = t
 
     @contextlib.asynccontextmanager
-    async def waiting(self) -> AsyncIterator[None]:
+    async def idling(self) -> AsyncIterator[None]:
         yield
 
     async def engage(self) -> None:
@@ -204,7 +204,8 @@ async def test_a_short_simulated_step_costs_3_n_minus_3_messages(
 ) -> None:
     """One claim and its answer, n-2 questions and answers (the designated member asks itself
     for free), n-1 deliveries of the announcement."""
-    monkeypatch.setattr("mover._tasks.POLL_AFTER", 10.0)  # short however loaded the machine is
+    # short however loaded the machine is
+    monkeypatch.setattr("mover._collective._member.POLL_AFTER", 10.0)
     world = FakeWorld()
     teams, fake = timed_teams(nodes, world, "cost")
     ops = {name: walker(clock, 0.3 if name == "n2" else 1e9) for name, clock in fake.items()}

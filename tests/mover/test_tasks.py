@@ -170,7 +170,7 @@ async def test_a_designated_member_without_collectives_fails_the_step_clearly(
 
 
 async def test_a_malformed_decision_leaves_every_listener_alive(nodes: list[Node]) -> None:
-    from mover._tasks import DECIDED_TOPIC
+    from mover._collective._step import DECIDED_TOPIC
 
     members, sender = nodes[:4], nodes[4]
     ts = teams(members)
@@ -193,7 +193,8 @@ async def test_steps_that_are_never_decided_stay_bounded(nodes: list[Node]) -> N
     """A member that opens 2,000 OR steps and never decides one: the designated member keeps
     at most its step memory of them (their waiters are told), not 2,000 tasks."""
     from mover import RemoteError
-    from mover._tasks import _STEP_MEMORY, Collectives
+    from mover._collective import Collectives
+    from mover._collective._step import STEP_MEMORY
 
     designated, rogue = nodes[0], nodes[1]
     collectives = Collectives(designated)
@@ -208,9 +209,9 @@ async def test_steps_that_are_never_decided_stay_bounded(nodes: list[Node]) -> N
         while designated.stats["recv.call"] < 2000:
             await asyncio.sleep(0.05)
     await asyncio.sleep(0.2)
-    assert len(collectives._steps) <= _STEP_MEMORY
-    assert len(designated._server.tasks) <= _STEP_MEMORY + 10
-    dropped = await asyncio.gather(*calls[: 2000 - _STEP_MEMORY], return_exceptions=True)
+    assert len(collectives._steps) <= STEP_MEMORY
+    assert len(designated._server.tasks) <= STEP_MEMORY + 10
+    dropped = await asyncio.gather(*calls[: 2000 - STEP_MEMORY], return_exceptions=True)
     assert all(isinstance(e, RemoteError) and "never decided" in str(e) for e in dropped)
     for call in calls:
         call.cancel()
@@ -220,13 +221,13 @@ async def test_steps_that_are_never_decided_stay_bounded(nodes: list[Node]) -> N
 async def test_a_successor_that_heard_the_decision_hands_it_on(nodes: list[Node]) -> None:
     """The designated member (n0) announced, then died; a member that missed the announcement
     asks the successor (n1), which heard it and moved on: it answers at once, the same."""
-    from mover._tasks import Collectives, Decision
+    from mover._collective import Collectives, Decision
 
     n0, n1, n2 = nodes[:3]
     members = [n.name for n in nodes]
     successor = Collectives(n1)
     heard = Decision("won", winner="n3", result=7)
-    successor.heard("r", 1).set_result(heard)  # as its listener would, from n0's broadcast
+    successor.learned("r", 1, heard)  # as if its listener heard n0's broadcast
     await n0.close()
     await n1.team.wait_gone("n0", timeout=10)
     await n2.team.wait_gone("n0", timeout=10)
@@ -273,7 +274,7 @@ async def test_the_designated_member_killed_right_after_it_announced(
 
 
 def test_a_member_counted_lost_is_told_that_it_was() -> None:
-    from mover._steps import Decision
+    from mover._collective import Decision
 
     lost = Decision("lost", lost=("moseley",))
     assert lost.lost_message("rescue", 1, "ernst") == "step 1 of run 'rescue' lost ['moseley']"

@@ -1,138 +1,44 @@
-"""Cooperative steps among team members: ``distributed_or`` and ``distributed_and``.
+"""A member's side of the collective steps: :class:`TaskTeam`, the steps as a program calls them.
 
-Every member of a program run calls the same collectives in the same order, so the n-th
-collective of a run is the same step on every member. Each step has a designated member, chosen
-as the task runs: the first (by name) of the step's members that is alive. It is an ordinary
-member, not a server; if it dies, the next one takes over.
-
-OR (MOVER's ``distributed_or``). Every member starts the operation. The first member to finish
-claims the win from the designated member, which takes the first claim it receives — one place,
-one order, so all members agree on one winner even when several finish within the same
-millisecond — and answers the claim. A member that has not heard the decision within
-``POLL_AFTER`` (a long step) asks the designated member for it and waits on that call, which
-also tells it when the designated member is lost. Members that did not ask get the decision in
-one broadcast. The others' operations are then cancelled (their ``finally`` blocks run: motors
-stop). Messages per step: n+1 for a short step (a claim, its answer, n-1 deliveries of the
-announcement), 2n for a long one (n-1 questions and answers, the claim and its answer).
-
-OR in simulated time (the team has a :class:`RunClock`, every member of the run has one: see
-:meth:`TaskTeam.begin`). A lock-step world's time is the same on every member, and the first to
-finish in that time should win, whatever order the claims arrive in. A claim carries its finish
-time (``clock.now()`` as the operation returned). The designated member then asks each live
-member that has not claimed, ``mover.or_passed(run, step, t)`` with ``t`` the earliest claimed
-time, for proof that it went past ``t``: the member answers once its operation for the step
-finished (with its finish time: its claim is on its way), or its clock passed ``t``
-(``clock.passed``), or at once if its operation failed or the run ended here (it will never
-claim); a member that has not reached the step yet answers once it has. The designated member
-decides when every live member has claimed or shown it went past the earliest claimed time:
-the winner is the earliest finish time, ties going to the first member by name. A member that
-leaves meanwhile is handled as in any step (``MemberLost``, or survived). The decision reaches
-the members as above. Messages: 3(n - 1) for a short step (a claim and its answer, n - 2
-questions and their answers — the designated member asks itself for free — and n - 1
-deliveries of the announcement; the same when the designated member wins: n - 1 questions, no
-claim sent), at most 4(n - 1) for a long one (polls replace the announcement); each further
-claim before the decision adds two. Without a clock the wall-clock rule above holds, at its cost.
-A member that went past the earliest claimed time is held there (``RunClock.hold``: it hands in
-no command on later readings) until it knows the decision, and its operation is cancelled
-before it is released: in a lock-step world the losers stop on the same tick, whatever the
-wall clock does. AND in simulated time: a member that finished is idle while it waits
-(``RunClock.waiting``: the world neither waits for it nor moves on because of it), and a
-``rejoin`` step (2(n - 1) messages) engages every member again before any goes on; so when
-the last one finishes the world holds still until all have been told. A run then repeats to
-the last digit.
-
-Beginning (:meth:`TaskTeam.begin`, step 0, of kind ``"begin"``, which every run hosted by
-:class:`~mover.ProgramHost` starts with): an AND barrier in which each member reports its
-clock's time, so that all start on the same tick; the members learn whether every one of them
-has a clock (then their ORs are decided in simulated time), and a spread of start times is
-logged as a warning. Cost: 2(n - 1) messages.
-
-Randomness: :attr:`TaskTeam.seed` (given at launch, else derived from the run's name) and
-:meth:`TaskTeam.rng`, one generator per (seed, member, stream), so that the same seed gives the
-same choices on every run whatever the run is called.
-
-AND, designated variant (section 4.4): each member sends its result to the designated member and
-gets everybody's results in the reply, once all have finished: 2(n-1) messages.
-AND, all-to-all: each member sends its result to every other member: 2n(n-1) messages.
-(A message is one sealed envelope; a call is a request and its reply.)
-
-Failures. A member that leaves the team during a step (its process died or hung past its lease)
-makes the step fail with :class:`MemberLost` within about a second, or, with
-``policy="survivors"``, the step goes on without it (an OR whose members all died still fails).
-A member that has lost every link (the network is gone) does not count anyone as lost: the step
-stalls, and resumes when the links return, re-sending what was not answered; the designated
-member keeps its state, so no result is lost. Limitation: if the membership views of two members
-disagree for a moment (a link flapping), both may act as designated member of the same step;
-taking over waits until every live member has re-joined, which covers the common case.
-
-Modules: this one is a member's side (:class:`TaskTeam`); the designated member's side is
-:mod:`mover._collectives` (:class:`Collectives`), and what both share (the decision, the
-step's state, the constants) is :mod:`mover._steps`.
+Every member runs the same steps in the same order; for each, it runs its operation (owned by
+the step's :class:`~._group.StepTasks`), then claims, asks or waits for the decision that the
+node's :class:`~._designated.Collectives` holds. What each step costs in messages, and why it
+is safe: ``docs/collectives.md``.
 """
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
+import inspect
 import logging
 import random
 import time
 from collections.abc import Awaitable, Callable, Sequence
 from typing import TYPE_CHECKING, Any
 
-from ._collectives import Collectives
-from ._exceptions import (
-    MemberLost,
-    NotDelivered,
-)
-from ._steps import (
-    _STEP_MEMORY,
+from .._exceptions import MemberLost, NotDelivered
+from ._clock import RunClock, TimedOp
+from ._designated import AND_DONE, AND_PUT, OR_CLAIM, OR_JOIN, Collectives
+from ._group import Settled, StepTasks
+from ._reach import Retry, wait_reachable
+from ._step import (
     CALL_TIMEOUT,
-    DECIDED_TOPIC,
-    LOST_GRACE,
     POLL_AFTER,
     SEED_LIMIT,
     Decision,
     OperationFailed,
     Outcome,
     Policy,
-    RunClock,
-    Settled,
     StepMetrics,
-    _LocalOp,
-    _Retry,
-    _StepTasks,
-    _unwire,
     seed_of,
-    wait_reachable,
+    unwire,
 )
 
 if TYPE_CHECKING:
-    from ._node import Node
+    from .._node import Node
 
 log = logging.getLogger("mover.tasks")
-
-__all__ = [
-    "CALL_TIMEOUT",
-    "DECIDED_TOPIC",
-    "LOST_GRACE",
-    "POLL_AFTER",
-    "SEED_LIMIT",
-    "_STEP_MEMORY",
-    "Collectives",
-    "Decision",
-    "OperationFailed",
-    "Outcome",
-    "Policy",
-    "RunClock",
-    "StepMetrics",
-    "TaskTeam",
-    "seed_of",
-    "wait_reachable",
-]
-
-
-# -- a member's side ------------------------------------------------------------------------------
 
 
 class TaskTeam:
@@ -259,11 +165,11 @@ class TaskTeam:
         returns. Raises MemberLost if a member is lost (policy ``fail``) or all are.
         """
         metrics = self._begin("or")
-        async with _StepTasks() as tasks:  # leaving it awaits the losers' cleanup
+        async with StepTasks() as tasks:  # leaving it awaits the losers' cleanup
             clock = self.clock if self.simulated else None
-            local = _LocalOp(clock, operation, tasks.start) if clock is not None else None
+            local = TimedOp(clock, operation, tasks.start) if clock is not None else None
             op = local.op if local is not None else tasks.start(operation())
-            self.collectives.reached(self.run, metrics.step, local)
+            self.collectives.operations.reached(self.run, metrics.step, local)
             try:
                 decision = await self._or_decision(metrics, tasks, op, local)
             finally:
@@ -278,9 +184,9 @@ class TaskTeam:
     async def _or_decision(
         self,
         metrics: StepMetrics,
-        tasks: _StepTasks,
+        tasks: StepTasks,
         op: asyncio.Task[Settled],
-        local: _LocalOp | None,
+        local: TimedOp | None,
     ) -> Decision:
         """Wait for the step's decision: claim it if ``op`` finishes first, else hear it.
 
@@ -289,14 +195,13 @@ class TaskTeam:
         to the designated member, a lost link) asks for it, and so does every member after the
         designated member is lost.
         """
-        heard = self.collectives.heard(self.run, metrics.step)
+        heard = self.collectives.decision(self.run, metrics.step)
         designated = await self._designated()
         try:
             decision = await self._or_wait(metrics, tasks, op, heard, designated, local)
-            if not heard.done():
-                # Known here now (a claim's or a poll's answer), as if heard: should this
-                # member become the designated one, it hands the decision on (see Collectives).
-                heard.set_result(decision)
+            # Known here now (perhaps from a claim's or a poll's answer): should this member
+            # become the designated one, it hands the decision on.
+            self.collectives.learned(self.run, metrics.step, decision)
             return decision
         finally:
             # The designated member counts its announcement's deliveries (n-1, or none), and
@@ -306,11 +211,11 @@ class TaskTeam:
     async def _or_wait(
         self,
         metrics: StepMetrics,
-        tasks: _StepTasks,
+        tasks: StepTasks,
         op: asyncio.Task[Settled],
         heard: asyncio.Future[Decision],
         designated: str,
-        local: _LocalOp | None,
+        local: TimedOp | None,
     ) -> Decision:
         poll: asyncio.Task[Settled] | None = None
         poll_at = time.monotonic() + POLL_AFTER
@@ -320,13 +225,13 @@ class TaskTeam:
                 if heard.done():
                     return heard.result()
                 if poll is not None and poll.done():
-                    return Decision.from_wire(poll.result().get())  # raises _Retry if failed
+                    return Decision.from_wire(poll.result().get())  # raises Retry if failed
                 ended = op.result() if op.done() else None
                 if ended is not None and ended.error is None:
                     metrics.finished = metrics.finished or time.perf_counter()
                     when = () if local is None else (local.finished_at,)  # simulated time
                     answer = await self._ask(
-                        metrics, designated, "mover.or_claim", *args, ended.value, *when
+                        metrics, designated, OR_CLAIM, *args, ended.value, *when
                     )
                     return Decision.from_wire(answer)
                 waiting: set[asyncio.Future[Any]] = {heard}
@@ -339,7 +244,7 @@ class TaskTeam:
                     waiting, timeout=timeout, return_when=asyncio.FIRST_COMPLETED
                 )
                 if not done and poll is None:
-                    poll = tasks.start(self._ask(metrics, designated, "mover.or_join", *args))
+                    poll = tasks.start(self._ask(metrics, designated, OR_JOIN, *args))
                 elif op in done and op.result().error is not None:
                     log.warning(
                         "%s: the operation of step %d failed: %r",
@@ -347,7 +252,7 @@ class TaskTeam:
                         metrics.step,
                         op.result().error,
                     )
-            except _Retry:
+            except Retry:
                 await self._recover(designated)
                 designated = await self._designated()
                 if poll is not None:
@@ -375,12 +280,12 @@ class TaskTeam:
             error = exc
             result = OperationFailed(type(exc).__name__, str(exc))
         metrics.finished = time.perf_counter()
-        wire = ["__failed__", result.type, result.message] if error else result
+        wire = result.to_wire() if error else result
         timed = self.clock is not None and self.simulated
         # In simulated time a member that finished is idle while it waits, so that the world
         # neither waits for it nor moves on because of it: when the last one finishes, the
         # world holds still until all have been told.
-        async with self.clock.waiting() if timed and self.clock else contextlib.nullcontext():
+        async with self.clock.idling() if timed and self.clock else contextlib.nullcontext():
             if designated:
                 decision = await self._and_designated(metrics, wire)
             else:
@@ -391,7 +296,7 @@ class TaskTeam:
             await self._rejoin()
         if error is not None:
             raise error
-        results = {m: _unwire(r) for m, r in decision.results.items()}
+        results = {m: unwire(r) for m, r in decision.results.items()}
         return await continuation(results) if continuation else results
 
     async def _and_designated(self, metrics: StepMetrics, result: Any) -> Decision:
@@ -401,7 +306,7 @@ class TaskTeam:
                 answer = await self._ask(
                     metrics,
                     designated,
-                    "mover.and_done",
+                    AND_DONE,
                     self.run,
                     metrics.step,
                     self.me,
@@ -409,11 +314,11 @@ class TaskTeam:
                     result,
                 )
                 return Decision.from_wire(answer)
-            except _Retry:
+            except Retry:
                 await self._recover(designated)
 
     async def _and_all(self, metrics: StepMetrics, result: Any) -> Decision:
-        state = self.collectives.step(self.run, metrics.step, self.members)
+        state = self.collectives.serve(self.run, metrics.step, self.members)
 
         async def send(member: str) -> None:
             while member in self.node.team or not self.node.connected():
@@ -421,7 +326,7 @@ class TaskTeam:
                     await self._ask(
                         metrics,
                         member,
-                        "mover.and_put",
+                        AND_PUT,
                         self.run,
                         metrics.step,
                         self.me,
@@ -429,13 +334,13 @@ class TaskTeam:
                         result,
                     )
                     return
-                except _Retry:
+                except Retry:
                     await self._recover(member)
 
         self.collectives.and_put(self.run, metrics.step, self.me, self.members, result)
         # Leaving waits for every send (the others need this result, even once this member
         # has all of theirs); a send that fails for good fails the step, and cancels the rest.
-        async with _StepTasks() as senders:
+        async with StepTasks() as senders:
             for member in self.members:
                 if member != self.me:
                     senders.spawn(send(member))
@@ -468,9 +373,8 @@ class TaskTeam:
 
     async def _ask(self, metrics: StepMetrics, member: str, procedure: str, *args: Any) -> Any:
         if member == self.me:  # the designated member is this one: no message
-            handler = getattr(self.collectives, procedure.split(".")[1])
-            result = handler(*args)
-            return await result if asyncio.iscoroutine(result) else result
+            result = self.collectives.procedures[procedure](*args)
+            return await result if inspect.isawaitable(result) else result
         metrics.requests += 1
         metrics.messages += 2
         try:
@@ -478,7 +382,7 @@ class TaskTeam:
             # is simply asked again (the designated member keeps the step).
             return await self.node.call(member, procedure, *args, timeout=CALL_TIMEOUT)
         except NotDelivered as exc:  # lost, unknown, timed out: find out why, then try again
-            raise _Retry(str(exc)) from exc
+            raise Retry(str(exc)) from exc
         # An answered error (UnknownProcedure, BadArguments, Refused, RemoteError) propagates:
         # the member answers, and asking again would only get the same answer.
 

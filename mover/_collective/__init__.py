@@ -1,0 +1,38 @@
+"""The collectives: ``distributed_or`` and ``distributed_and`` among the members of a run.
+
+A member's side (:class:`TaskTeam`, ``_member``), the node's side that serves the steps it is
+designated for and holds each step's decision (:class:`Collectives`, ``_designated``), this
+member's operations as the designated member asks about them (``_operations``), what a step is
+(``_step``), the one owner of a step's tasks (``_group``), the run's clock (:class:`RunClock`,
+``_clock``). The protocol, its costs and its wire: ``docs/collectives.md``.
+"""
+
+from ._clock import RunClock
+from ._designated import Collectives
+from ._member import TaskTeam
+from ._reach import wait_reachable
+from ._step import (
+    POLICIES,
+    SEED_LIMIT,
+    Decision,
+    OperationFailed,
+    Outcome,
+    Policy,
+    StepMetrics,
+    seed_of,
+)
+
+__all__ = [
+    "POLICIES",
+    "SEED_LIMIT",
+    "Collectives",
+    "Decision",
+    "OperationFailed",
+    "Outcome",
+    "Policy",
+    "RunClock",
+    "StepMetrics",
+    "TaskTeam",
+    "seed_of",
+    "wait_reachable",
+]

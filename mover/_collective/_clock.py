@@ -1,0 +1,78 @@
+"""The run's clock, and a member's OR operation timed by it.
+
+:class:`RunClock` is what a host's hardware offers a run for reproducible steps: the one clock
+protocol (:class:`mover.IdleClock`: now, passed, hold, idling) plus ``engage``/``release``, which
+the host calls as runs start and end. :class:`TimedOp` is a member's operation in an OR decided
+in simulated time, which the designated member's ``or_passed`` questions wait on. Without a
+clock neither is used, and an OR costs only its wall-clock messages.
+"""
+
+from __future__ import annotations
+
+import asyncio
+from collections.abc import Awaitable, Callable
+from typing import Any, Protocol
+
+from .._clock import IdleClock
+from ._group import Settled
+
+Spawn = Callable[[Awaitable[Any]], "asyncio.Task[Settled]"]
+
+
+class RunClock(IdleClock, Protocol):
+    """What a host's hardware offers for reproducible runs: its simulated time.
+
+    ``ProgramHost.clock`` is one (or None: a workstation, or no hardware yet); the robot process
+    sets it as an adapter over its hardware's clock and its idle task. A run engages it when it
+    starts and releases it when the last run on the host ends; a ``distributed_and`` idles it
+    (``idling``) while it waits for the other members.
+    """
+
+    async def engage(self) -> None:
+        """Stop idling: on return the world waits for this robot's commands."""
+        ...
+
+    def release(self) -> None:
+        """No run drives the hardware any more: idle again."""
+        ...
+
+
+class TimedOp:
+    """This member's operation in an OR step decided in simulated time, for the designated
+    member's ``or_passed``; it runs as a task of its step (``spawn``), and settles
+    (:class:`Settled`) rather than raise."""
+
+    def __init__(
+        self, clock: RunClock, operation: Callable[[], Awaitable[Any]], spawn: Spawn
+    ) -> None:
+        self.clock = clock
+        self.finished_at: float | None = None  # simulated time the operation returned at
+        self.op: asyncio.Task[Settled] = spawn(self._run(operation))
+
+    async def _run(self, operation: Callable[[], Awaitable[Any]]) -> Any:
+        result = await operation()
+        self.finished_at = self.clock.now()  # as it returns: no loop turn in between
+        return result
+
+    async def passed(self, t: float) -> dict[str, Any]:
+        """Once the operation finished or the clock passed ``t``: which (see or_passed)."""
+        if self.finished_at is None and not self.op.done():
+            waiter = asyncio.ensure_future(self.clock.passed(t))
+            try:
+                await asyncio.wait({self.op, waiter}, return_when=asyncio.FIRST_COMPLETED)
+            finally:
+                waiter.cancel()
+                await asyncio.gather(waiter, return_exceptions=True)
+            lost = waiter.done() and not waiter.cancelled() and waiter.exception() is not None
+            if lost and self.finished_at is None:
+                return {"out": True}  # the hardware went away: this run will not claim
+            for _ in range(3):  # an operation the same readings ended returns first
+                if self.finished_at is not None or self.op.done():
+                    break
+                await asyncio.sleep(0)
+        if self.finished_at is not None:
+            return {"finished": self.finished_at}
+        if self.op.done():
+            return {"out": True}  # failed or cancelled: it will never claim
+        self.clock.hold(t)  # no further until decided: where a loser stops is then fixed
+        return {"passed": self.clock.now()}
