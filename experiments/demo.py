@@ -244,7 +244,7 @@ def _report(
             entry[1] += st["messages"]
     n = len(outcomes)
     for step, (kind, msgs) in sorted(steps.items()):
-        # the designated-member costs of mover/_tasks.py; an OR is decided in simulated time
+        # the designated-member costs of docs/collectives.md; an OR is decided in simulated time
         # here (a lock-step world): at most 4(n-1); other kinds: all-to-all, 2n(n-1)
         designated = {"or": 4 * (n - 1), "and": 2 * (n - 1), "begin": 2 * (n - 1)}
         designated["rejoin"] = 2 * (n - 1)
