@@ -248,3 +248,33 @@ async def test_a_member_leaving_while_the_others_wait_for_it(
         assert {o.winner for o in outs} == {"n1"}
     assert time.monotonic() - t0 < 2.0
     await asyncio.gather(*tasks, return_exceptions=True)
+
+
+async def test_the_designated_members_questions_end_with_their_owner(nodes: list[Node]) -> None:
+    """The designated member's ``or_passed`` questions are tasks of one TaskGroup (its
+    Collectives' listener), not bare tasks: ending the owner ends every question still asked.
+    n2 claims at 0.2 s; n1 idles without ever going past it, so its question stays open."""
+    world = FakeWorld()
+    teams, fake = timed_teams(nodes, world, "owned")
+    stuck = asyncio.Event()
+
+    async def idle() -> str:
+        fake["n1"].release()  # the world goes on without it; it never hands in a command
+        await stuck.wait()
+        return "n1"
+
+    ops = {name: walker(clock, 0.2 if name == "n2" else 1e9) for name, clock in fake.items()}
+    ops["n1"] = idle
+    steps = [asyncio.ensure_future(t.distributed_or(ops[t.me])) for t in teams]  # type: ignore[arg-type]
+    designated = teams[0].collectives
+    async with asyncio.timeout(10):
+        while not (asked := [q for s in designated._steps.values() for q in s.asking.values()]):
+            await asyncio.sleep(0.02)
+    await asyncio.sleep(0.2)
+    assert not any(step.done() for step in steps)  # waiting for n1's answer
+    designated._listener.cancel()
+    await asyncio.gather(designated._listener, return_exceptions=True)
+    assert all(q.done() for q in asked)
+    for step in steps:
+        step.cancel()
+    await asyncio.gather(*steps, return_exceptions=True)
