@@ -287,7 +287,7 @@ class LockstepDoor(Generic[S]):
         """Whether any caller waits for readings."""
         return any(not w.done() for w in self._waiters.values())
 
-    def tick(self, handed: Mapping[str, Command]) -> None:
+    def run_tick(self, handed: Mapping[str, Command]) -> None:
         """Run one tick: the commands ``handed`` in, else idle robots' standing ones, in id
         order; then place the robots waiting to join, and answer everyone."""
         self.disarm()

@@ -103,7 +103,7 @@ class Schedule:
         waited = len(door.stepper.robots()) - len(door.idles)
         if waited > 0 and len(commands) >= waited and all(r in commands for r in door.busy()):
             self.commands = {}
-            door.tick(commands)
+            door.run_tick(commands)
         elif door.joins and not door.busy():
             door.admit_now()
 
@@ -178,7 +178,7 @@ class RealTime(Schedule):
             await asyncio.sleep(max(0.0, next_at - time.monotonic()))
             if door.stepper.robots():
                 commands, self.commands = self.commands, {}
-                door.tick(commands)
+                door.run_tick(commands)
             else:
                 next_at = time.monotonic()
 
