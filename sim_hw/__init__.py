@@ -9,7 +9,7 @@ The continuous wing's public face is re-exported here, since it is the default w
 """
 
 from sim_hw import continuous as _continuous
-from sim_hw._caller import WorldLost
+from sim_hw._link import WorldLost
 from sim_hw._process import STATE_TOPIC
 from sim_hw.continuous import *  # noqa: F403
 

@@ -20,9 +20,9 @@ import logging
 from collections.abc import Callable
 from typing import Any
 
-from mover import MoverError, pack
+from mover import MoverError
 from mover.cli import member_name, positive
-from sim_hw._caller import frame_topics
+from sim_hw._frames import read_command, readings_frame, topics
 from sim_hw._lockstep import LockstepDoor, RobotDropped
 
 log = logging.getLogger("sim_hw.process")
@@ -114,7 +114,7 @@ def serve(node: Any, door: LockstepDoor[Any], *, frames: bool = True) -> None:
 
     From now on liveness decides drops (``door.drop_silent`` is turned off: a silent robot
     that is still a member is waited for). With ``frames`` (and robots acting together), ticks
-    are also taken and answered as frames (see ``sim_hw._caller``): the join's answer says so.
+    are also taken and answered as frames (see ``sim_hw._frames``): the join's answer says so.
     """
     door.drop_silent = False
     offered = frames and door.turns == "together"
@@ -155,7 +155,7 @@ class _TickFrames:
 
     def __init__(self, node: Any, door: LockstepDoor[Any]) -> None:
         self.node, self.door = node, door
-        commands, self.topic = frame_topics(node.name)
+        commands, self.topic = topics(node.name)
         self.pending: dict[str, int] = {}  # robot -> the tick it waits on by frame
         self.refused = 0
         self.sub = node.subscribe(commands, maxlen=COMMAND_QUEUE)
@@ -168,27 +168,21 @@ class _TickFrames:
 
     def take(self, sender: str, data: Any) -> None:
         """One robot's command for a tick; only its sender may hand it in."""
-        if not (
-            isinstance(data, list)
-            and len(data) == 3
-            and data[0] == sender
-            and type(data[1]) is int
-            and isinstance(data[2], dict)
-        ):
+        frame = read_command(sender, data)
+        if frame is None:
             self.refused += 1
             log.debug("a malformed command frame from %r", sender)
             return
-        robot, tick, command = data
+        robot, tick, command = frame
         self.pending[robot] = tick
         try:
-            waiter = self.door.submit(robot, tick, command)
+            done = self.door.hand_in(robot, tick, command)
         except RobotDropped:  # the robot's fallback call will be told
             self.pending.pop(robot, None)
             return
-        waiter.add_done_callback(_consumed)
-        if waiter.done() and robot in self.pending:  # a retry for a tick already done
+        if done is not None and robot in self.pending:  # a retry for a tick already done
             del self.pending[robot]
-            self.send({robot: pack(waiter.result())})
+            self.send({robot: done})
 
     def flush(self, commands: Any) -> None:
         """The tick is done: one frame with the readings of every robot that asked by frame,
@@ -198,22 +192,17 @@ class _TickFrames:
             return
         st = self.door.stepper
         robots = st.robots()
-        entries = {r: pack(st.readings(r)) for r in sorted({*self.pending, *idle}) if r in robots}
+        entries = {r: st.readings(r) for r in sorted({*self.pending, *idle}) if r in robots}
         self.pending.clear()
         if entries:
             self.send(entries)
 
-    def send(self, entries: dict[str, bytes]) -> None:
-        frame = {"tick": self.door.stepper.tick, "readings": entries}
+    def send(self, entries: dict[str, Any]) -> None:
+        frame = readings_frame(self.door.stepper.tick, entries)
         try:
             self.node.broadcast_nowait(self.topic, frame, reliable=True, express=True)
         except MoverError as exc:  # too large, or the node closing: robots will ask by call
             log.warning("tick frame not sent: %s", exc)
-
-
-def _consumed(waiter: asyncio.Future[Any]) -> None:
-    if not waiter.cancelled():
-        waiter.exception()  # retrieved: a dropped robot's waiter is no one's error
 
 
 async def run_world_process(

@@ -1,7 +1,7 @@
 """The robots' hardware interface (robots/hal.py) implemented on a simulated world.
 
 One class, :class:`SimHardware`, serves both backends: it collects the commands for the next
-tick and keeps the readings of the last one in a :class:`sim_hw._caller.Ticks`, the robot's
+tick and keeps the readings of the last one in a :class:`sim_hw._ticks.Ticks`, the robot's
 clock over a link to its world — a direct call into a :class:`WorldServer` in process, or one
 exchange of frames per tick with the world process. Concurrent waiters on a tick share one
 exchange, so a robot sends exactly one command per tick however many of its tasks wait, and a
@@ -23,8 +23,9 @@ from robots.hal import (
     PushResult,
     Sighting,
 )
-from sim_hw import _caller
-from sim_hw._caller import Ticks, WorldLink
+from sim_hw import _link
+from sim_hw._link import WorldLink
+from sim_hw._ticks import Ticks
 
 from ._contract import Command, Readings
 from ._world import TICK
@@ -288,7 +289,7 @@ class _Push:
 
 async def in_process(server: Any, robot_id: str, spec: Mapping[str, Any] | None = None) -> Hardware:
     """Join ``server`` (a :class:`WorldServer` in this process) and return the robot's HAL."""
-    joined, link = await _caller.in_process(server, robot_id, spec)
+    joined, link = await _link.in_process(server, robot_id, spec)
     return SimHardware(robot_id, joined["spec"], joined["readings"], link).hardware()
 
 
@@ -303,10 +304,8 @@ async def remote(
     """Join the world process ``world`` over ``node`` (a ``mover.Node``); return the HAL.
 
     One exchange per tick (a frame each way where the world offers it, else a call; see
-    ``sim_hw._caller``); a call not answered in ``call_timeout`` s is asked again while the
+    ``sim_hw._link``); a call not answered in ``call_timeout`` s is asked again while the
     world is alive. The robot's id must be its node's name.
     """
-    joined, link = await _caller.remote(
-        node, robot_id, spec, world=world, call_timeout=call_timeout
-    )
+    joined, link = await _link.remote(node, robot_id, spec, world=world, call_timeout=call_timeout)
     return SimHardware(robot_id, joined["spec"], joined["readings"], link).hardware()

@@ -16,7 +16,7 @@ from typing import Any
 from mover import RemoteError
 from robots.hal import Sonar
 from robots.stigmergic import EyeBotHardware, FootBotHardware, Goal, Heard, Instruction, Spot
-from sim_hw import _caller
+from sim_hw import _link
 
 from ._contract import Command
 from ._hardware import SimHardware, _Clock, _Drive, _Led, _Odometry, _Radio, _Sonar
@@ -143,7 +143,7 @@ def _kind_of(joined: Mapping[str, Any], robot_id: str, kind: str) -> None:
 
 async def eyebot_in_process(server: Any, robot_id: str) -> EyeBotHardware:
     """Join ``server`` (a ``WorldServer`` in this process) as the eye-bot ``robot_id``."""
-    joined, link = await _caller.in_process(server, robot_id, {"kind": EYEBOT})
+    joined, link = await _link.in_process(server, robot_id, {"kind": EYEBOT})
     _kind_of(joined, robot_id, EYEBOT)
     return EyeBotSim(robot_id, joined["spec"], joined["readings"], link).eyebot()
 
@@ -152,7 +152,7 @@ async def footbot_in_process(
     server: Any, robot_id: str, spec: Mapping[str, Any] | None = None
 ) -> FootBotHardware:
     """Join ``server`` (a ``WorldServer`` in this process) as the foot-bot ``robot_id``."""
-    joined, link = await _caller.in_process(server, robot_id, {**(spec or {}), "kind": FOOTBOT})
+    joined, link = await _link.in_process(server, robot_id, {**(spec or {}), "kind": FOOTBOT})
     _kind_of(joined, robot_id, FOOTBOT)
     return FootBotSim(robot_id, joined["spec"], joined["readings"], link).footbot()
 
@@ -172,7 +172,7 @@ async def join_remote(
     with the world's reason: the robot process says it in one line.
     """
     try:
-        joined, link = await _caller.remote(
+        joined, link = await _link.remote(
             node, robot_id, {**(spec or {}), "kind": kind}, world=world, call_timeout=call_timeout
         )
     except RemoteError as exc:

@@ -97,7 +97,7 @@ class SkyStepper(WorldStepper):
         self.world.step()
         self._readings = None
 
-    def _take(self, eyebot: str, irrb: Any) -> None:
+    def _take(self, eyebot: str, irrb: object) -> None:
         if irrb is None:
             return
         if (

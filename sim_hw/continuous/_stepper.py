@@ -125,7 +125,6 @@ class WorldServer(LockstepDoor[WorldStepper]):
         self.world = world
         self.snapshot_every = snapshot_every
         self.on_snapshot = on_snapshot
-        self._tasks: set[asyncio.Task[Any]] = set()
         if on_tick is not None:
             self.on_tick.append(lambda commands: on_tick(world, commands))
         self.on_tick.append(self._publish)
@@ -136,15 +135,7 @@ class WorldServer(LockstepDoor[WorldStepper]):
             return
         result = send(self.world.snapshot())
         if inspect.isawaitable(result):
-            task = asyncio.ensure_future(_quietly(result))
-            self._tasks.add(task)
-            task.add_done_callback(self._tasks.discard)
-
-    async def aclose(self) -> None:
-        """Stop the real-time clock, fail every pending call, finish the snapshots sent."""
-        await super().aclose()
-        for task in list(self._tasks):
-            await task
+            self.keep(asyncio.ensure_future(_quietly(result)), finish=True)
 
 
 async def _quietly(awaitable: Awaitable[Any]) -> None:

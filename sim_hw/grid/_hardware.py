@@ -1,7 +1,7 @@
 """The ``grid`` hardware backend: a robot's grid HAL (robots/grid_hal.py) over a grid world.
 
 :class:`GridRobot` collects this round's action and keeps the last perception in a
-:class:`sim_hw._caller.Ticks` (the robot's clock over its link to the world: one exchange per
+:class:`sim_hw._ticks.Ticks` (the robot's clock over its link to the world: one exchange per
 round, a cancelled one finished in the background, idling).
 
 Rounds belong to whoever drives them. A program that owns the clock (:meth:`GridRobot.owned`)
@@ -20,8 +20,9 @@ from collections.abc import AsyncIterator, Mapping
 from typing import Any
 
 from robots.grid_hal import OFFSETS, GridHardware, Here, Near, Seen
-from sim_hw import _caller
-from sim_hw._caller import Ticks, WorldLink
+from sim_hw import _link
+from sim_hw._link import WorldLink
+from sim_hw._ticks import Ticks
 
 _OWNER: contextvars.ContextVar[object | None] = contextvars.ContextVar("grid_owner", default=None)
 
@@ -270,7 +271,7 @@ async def in_process(
     server: Any, robot_id: str, spec: Mapping[str, Any] | None = None, *, idle_period: float = 0.0
 ) -> GridHardware:
     """Join ``server`` (a :class:`~sim_hw.grid.GridServer` in this process)."""
-    joined, link = await _caller.in_process(server, robot_id, spec)
+    joined, link = await _link.in_process(server, robot_id, spec)
     return GridRobot(
         robot_id, joined["spec"], joined["readings"], link, idle_period=idle_period
     ).hardware()
@@ -288,13 +289,11 @@ async def connect(
     """Join the grid world process ``world`` over ``node`` (a ``mover.Node``); return the HAL.
 
     One exchange per round (a frame each way where the world offers it, else a call; see
-    ``sim_hw._caller``); a call not answered in ``call_timeout`` s is asked again while the
+    ``sim_hw._link``); a call not answered in ``call_timeout`` s is asked again while the
     world is alive. The robot's id must be its node's name: the world drops the robot when
     that member leaves the team.
     """
-    joined, link = await _caller.remote(
-        node, robot_id, spec, world=world, call_timeout=call_timeout
-    )
+    joined, link = await _link.remote(node, robot_id, spec, world=world, call_timeout=call_timeout)
     return GridRobot(
         robot_id, joined["spec"], joined["readings"], link, idle_period=idle_period
     ).hardware()

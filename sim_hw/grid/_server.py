@@ -26,9 +26,9 @@ from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Callable, Collection, Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -40,6 +40,9 @@ from sim_hw.grid._maze import observable, star_view
 from sim_hw.grid._render import render_text
 from sim_hw.grid._sensing import hearers
 from sim_hw.grid._world import GridWorld
+
+if TYPE_CHECKING:
+    from mover import Node
 
 log = logging.getLogger("sim_hw.grid")
 
@@ -309,7 +312,9 @@ class GridStepper:
 
 
 class GridServer(LockstepDoor[GridStepper]):
-    """Runs a grid world in lock-step rounds for the robots that join it (see the module).
+    """Runs a grid world in lock-step rounds for the robots that join it (see the module): the
+    door over a :class:`GridStepper`, with the grid's views (round, robots, state, text). What
+    happens after a round is told to the door's ``on_tick`` hooks.
 
     ``expect`` robots must join before the first round; ``timeout`` wall seconds of silence in
     a round drop a robot (in process; a world process only says so, see ``sim_hw._lockstep``);
@@ -342,13 +347,6 @@ class GridServer(LockstepDoor[GridStepper]):
         super().__init__(stepper, expect=expect, timeout=timeout, turns=turns)
         self.world = world
         self.grid = world.grid
-        #: Called with the server after every round (snapshots, recorders).
-        self.on_round: Callable[[GridServer], None] | None = None
-        self.on_tick.append(self._after_round)
-
-    def _after_round(self, commands: Mapping[str, Command]) -> None:
-        if self.on_round is not None:
-            self.on_round(self)
 
     @property
     def round(self) -> int:
@@ -391,7 +389,7 @@ class GridServer(LockstepDoor[GridStepper]):
         return render_text(self.world, st.round, cells, st.seen, st.target)
 
 
-def serve_grid(node: Any, server: GridServer) -> None:
+def serve_grid(node: Node, server: GridServer) -> None:
     """Export ``server``'s calls on ``node``: join, step, leave, and ``state`` and
     ``snapshot`` (the field as text) for tools."""
     serve(node, server)

@@ -217,7 +217,7 @@ def run(args: argparse.Namespace) -> int:
                     last[:] = [mark]
                     _write_snapshot(s, where)
 
-        server.on_round = on_round
+        server.on_tick.append(lambda _commands: on_round(server))
     try:
         team, config = Team.from_env(), NodeConfig.from_env()
     except ValueError as exc:

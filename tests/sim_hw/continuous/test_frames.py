@@ -13,7 +13,7 @@ from typing import Any
 
 from mover import Node, NodeConfig, Team, free_port
 from sim_hw import World, WorldServer, random_obstacles, remote
-from sim_hw._caller import frame_topics
+from sim_hw._frames import topics as frame_topics
 from sim_hw._process import serve
 
 

@@ -1,16 +1,16 @@
-"""The robot's end of a world: join, one exchange per tick, idling — in process or over zenoh.
+"""The robot's link to its world: join, one exchange per tick, idling — in process or over zenoh.
 
 Both wings' hardware is built on this. A backend joins and gets ``(joined, link)``: ``joined``
 is the world's ``{"spec", "readings"}`` answer, ``link`` a :class:`WorldLink` (hand in the
 command for a tick and wait for the readings after it; mark the robot idle or awake; watch an
-idle robot's world). :class:`Ticks` is the robot's clock over a link, shared by both wings.
+idle robot's world). The robot's clock over a link is ``sim_hw._ticks.Ticks``.
 
 * :func:`in_process` — the lock-step door in this process, awaited directly.
 * :func:`remote` — a world process over a ``mover.Node``. Joins are calls. Ticks are frames
   when the world offers them (``joined["frames"]``): the robot broadcasts its command on the
   world's command topic, and the world answers every robot of a tick with one frame of
   readings on its readings topic, each robot's entry packed apart so that a robot decodes only
-  its own (:func:`frame_topics`). This costs the world one signature per tick instead of one
+  its own (``sim_hw._frames``). This costs the world one signature per tick instead of one
   reply per robot. The first tick, and any tick whose frame does not come within
   ``FRAME_WAIT`` seconds (a lost frame, a world that dropped the robot, a world that is gone),
   is a call instead (``step``), which is idempotent: a retry for a tick already done gets the
@@ -24,13 +24,19 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
-import math
 import time
-from collections.abc import AsyncIterator, Awaitable, Callable, Mapping
-from typing import Any, Protocol
+from collections.abc import Awaitable, Callable, Mapping
+from typing import TYPE_CHECKING, Any, Protocol
 
 from robots.hal import HardwareLost
-from sim_hw._lockstep import Command, Readings, RobotDropped
+
+from ._frames import command_frame, own_entry, read_readings, topics
+from ._types import Command, Readings, RobotDropped
+
+if TYPE_CHECKING:
+    from mover import Membership, Node, Subscription
+
+    from ._lockstep import LockstepDoor
 
 log = logging.getLogger("sim_hw.caller")
 
@@ -68,15 +74,10 @@ class WorldLink(Protocol):
         ...
 
 
-def frame_topics(world: str) -> tuple[str, str]:
-    """The topics of a world's tick frames: (commands to it, readings from it)."""
-    return (f"sim/{world}/commands", f"sim/{world}/readings")
-
-
 class _DoorLink:
     """A :class:`WorldLink` to a lock-step door in this process."""
 
-    def __init__(self, door: Any, robot: str) -> None:
+    def __init__(self, door: LockstepDoor[Any], robot: str) -> None:
         self.door, self.robot = door, robot
 
     async def exchange(self, tick: int, command: Command) -> Readings:
@@ -94,14 +95,14 @@ class _DoorLink:
 
 
 async def in_process(
-    door: Any, robot_id: str, spec: Mapping[str, Any] | None = None
+    door: LockstepDoor[Any], robot_id: str, spec: Mapping[str, Any] | None = None
 ) -> tuple[dict[str, Any], WorldLink]:
     """Join ``door`` (a lock-step door in this process)."""
     joined: dict[str, Any] = await door.join(robot_id, spec)
     return joined, _DoorLink(door, robot_id)
 
 
-def world_caller(node: Any, world: str, call_timeout: float) -> Callable[..., Awaitable[Any]]:
+def world_caller(node: Node, world: str, call_timeout: float) -> Callable[..., Awaitable[Any]]:
     """``call(procedure, *args)`` on the world process, for as long as it is alive.
 
     The world's calls (join, step, idle, wake) are idempotent. One that is not answered within
@@ -144,10 +145,10 @@ def world_caller(node: Any, world: str, call_timeout: float) -> Callable[..., Aw
 class _RemoteLink:
     """A :class:`WorldLink` to a world process, over a node (see the module)."""
 
-    def __init__(self, node: Any, robot: str, world: str, call_timeout: float) -> None:
+    def __init__(self, node: Node, robot: str, world: str, call_timeout: float) -> None:
         self.node, self.robot, self.world = node, robot, world
         self.call = world_caller(node, world, call_timeout)
-        self.commands, self.readings_topic = frame_topics(world)
+        self.commands, self.readings_topic = topics(world)
         self.frames = node.subscribe(self.readings_topic, maxlen=FRAME_QUEUE)
         self.offered = False
         self.warm = False  # the first tick is a call: by its end the world has our subscription
@@ -167,7 +168,7 @@ class _RemoteLink:
     async def exchange(self, tick: int, command: Command) -> Readings:
         if self.warm:
             self.node.broadcast_nowait(
-                self.commands, [self.robot, tick, command], reliable=True, express=True
+                self.commands, command_frame(self.robot, tick, command), reliable=True, express=True
             )
             got = await _own_entry(self.frames, self.world, self.robot, tick, FRAME_WAIT)
             if got is not None:
@@ -208,28 +209,23 @@ class _RemoteLink:
         frame without it may mean the world dropped us: ask."""
         if not self.offered:
             await asyncio.Event().wait()  # no frames: membership alone tells
-        from mover import unpack
-
         while True:
             try:
                 msg = await self.frames.get()
             except StopAsyncIteration:  # the node is closing: membership tells the rest
                 await asyncio.Event().wait()
                 return
-            data = msg.data
-            if msg.sender != self.world or not isinstance(data, dict):
+            frame = read_readings(msg.data) if msg.sender == self.world else None
+            if frame is None:
                 continue
-            entries = data.get("readings")
-            if not isinstance(entries, dict):
-                continue
-            entry = entries.get(self.robot)
-            if isinstance(entry, bytes):
-                on_readings(unpack(entry))
-            elif len(entries) > 1:  # a tick's frame (not one robot's retry) without us
+            readings = own_entry(frame, self.robot)
+            if readings is not None:
+                on_readings(readings)
+            elif len(frame.entries) > 1:  # a tick's frame (not one robot's retry) without us
                 await self.call("idle", self.robot, self.standing)  # still ours?
 
 
-async def _gone(team: Any, name: str) -> None:
+async def _gone(team: Membership, name: str) -> None:
     """Return once ``name`` is not a member of ``team`` (however long that takes)."""
     while name in team:
         with contextlib.suppress(TimeoutError):
@@ -250,7 +246,7 @@ async def _first_failure(*coros: Awaitable[None]) -> None:
 
 
 async def remote(
-    node: Any,
+    node: Node,
     robot_id: str,
     spec: Mapping[str, Any] | None = None,
     *,
@@ -269,11 +265,9 @@ async def remote(
 
 
 async def _own_entry(
-    frames: Any, world: str, robot_id: str, tick: int, wait: float
+    frames: Subscription, world: str, robot_id: str, tick: int, wait: float
 ) -> Readings | None:
     """This robot's readings from the first frame after ``tick``, or None after ``wait`` s."""
-    from mover import unpack
-
     deadline = time.monotonic() + wait
     while True:
         left = deadline - time.monotonic()
@@ -283,183 +277,8 @@ async def _own_entry(
             msg = await frames.get(timeout=left)
         except (TimeoutError, StopAsyncIteration):
             return None
-        data = msg.data
-        if msg.sender != world or not isinstance(data, dict):
-            continue
-        entry = data.get("readings", {}).get(robot_id) if data.get("tick", -1) > tick else None
-        if isinstance(entry, bytes):
-            readings: Readings = unpack(entry)
-            return readings
-
-
-class Ticks:
-    """A robot's clock over a :class:`WorldLink`: its readings, one exchange at a time, idling.
-
-    * ``tick(make)`` hands in ``make()`` (the command, built when the exchange starts) for the
-      tick of the current readings and waits for the next readings. Concurrent callers share
-      the exchange under way. The exchange runs as its own task: a caller that is cancelled
-      leaves it to finish in the background (the world never sees half an exchange, and never
-      a second command for the tick), and the next ``tick`` waits for it before its own.
-    * ``idling(stop)``: the world neither waits for this robot nor lets it hold a tick back;
-      ``stop()`` is the command that stands meanwhile (the stopped drive). The readings keep
-      coming (frames carry idle robots' entries). Leaving is acknowledged by the world: on
-      return, the world waits for this robot's command for the tick of ``readings``. A block
-      left by cancellation does not wake the robot (it is going away); an exception does.
-    * ``passed(t)`` returns once a command was handed in at a tick whose time is after ``t``.
-
-    ``time_of(readings)`` is a tick's time (simulated seconds, or a round number); ``tick_of``
-    its number; ``after(command, readings)`` runs when an exchange ends (in its task), before
-    the new readings are seen.
-    """
-
-    def __init__(
-        self,
-        robot: str,
-        link: WorldLink,
-        readings: Readings,
-        *,
-        tick_of: Callable[[Readings], int],
-        time_of: Callable[[Readings], float],
-        after: Callable[[Command, Readings], None] | None = None,
-    ) -> None:
-        self.robot = robot
-        self.readings = readings
-        self._link = link
-        self._tick_of, self._time_of, self._after = tick_of, time_of, after
-        self._task: asyncio.Task[None] | None = None
-        self._waiting = 0  # callers awaiting the exchange under way
-        self._idle = False
-        self._handed = -math.inf  # time of the readings the last command was handed in on
-        self._hold: float | None = None  # no command on readings later than this (hold)
-        self._lost: HardwareLost | None = None
-        self._changed = asyncio.Event()
-
-    @property
-    def idle(self) -> bool:
-        """Whether the robot is inside :meth:`idling`."""
-        return self._idle
-
-    def now(self) -> float:
-        """The time of the current readings."""
-        return self._time_of(self.readings)
-
-    async def tick(self, make: Callable[[], Command]) -> None:
-        """One exchange (shared with concurrent callers; see the class)."""
-        if self._idle:
-            raise RuntimeError(f"robot {self.robot!r} is idle (inside clock.idling()): no ticks")
-        task = self._task
-        if task is not None and not task.done() and self._waiting == 0:
-            await self._finish(task)  # left by a cancelled caller: it goes first
-            task = self._task
-        while self._hold is not None and self.now() > self._hold and (task is None or task.done()):
-            await self._wait_change()  # held (see hold): until released
-            task = self._task
-        if task is None or task.done():
-            task = self._task = asyncio.get_running_loop().create_task(self._exchange(make))
-            task.add_done_callback(_retrieved)
-        self._waiting += 1
-        try:
-            await asyncio.shield(task)
-        finally:
-            self._waiting -= 1
-
-    async def _finish(self, task: asyncio.Task[None]) -> None:
-        """Wait for ``task`` to end; raise what it raised if it lost the hardware."""
-        await asyncio.wait([task])
-        failure = None if task.cancelled() else task.exception()
-        if isinstance(failure, HardwareLost):
-            raise failure
-
-    async def _exchange(self, make: Callable[[], Command]) -> None:
-        if self._lost is not None:
-            raise self._lost
-        command = make()
-        self._handed = self.now()
-        self._pulse()
-        try:
-            readings = await self._link.exchange(self._tick_of(self.readings), command)
-        except HardwareLost as exc:
-            self._lose(exc)
-            raise
-        if self._after is not None:
-            self._after(command, readings)
-        self.readings = readings
-        self._pulse()
-
-    def hold(self, t: float | None) -> None:
-        """Hand in no command on readings later than ``t`` until ``hold(None)``: a tick waits
-        (and may be cancelled there, having handed in nothing). A ``distributed_or`` in
-        simulated time holds a member that is past the earliest finish until the decision, so
-        that a loser stops on the same tick whatever the wall clock does."""
-        self._hold = t
-        self._pulse()
-
-    async def passed(self, t: float) -> None:
-        """Return once a command was handed in with readings of time ``t`` or later: this
-        robot went on past ``t`` (a robot whose program stopped at ``t`` hands in nothing)."""
-        while not self._handed >= t:
-            if self._lost is not None:
-                raise self._lost
-            await self._wait_change()
-
-    @contextlib.asynccontextmanager
-    async def idling(self, stop: Callable[[], Command]) -> AsyncIterator[None]:
-        """Be idle for the block (see the class); HardwareLost if the world is gone."""
-        if self._idle:
-            raise RuntimeError(f"robot {self.robot!r} is already idle")
-        if self._task is not None and not self._task.done():
-            await self._finish(self._task)  # the exchange under way ends first
-        if self._lost is not None:
-            raise self._lost
-        self._idle = True
-        try:
-            self.readings = await self._guard(self._link.idle(stop()))
-            watch = asyncio.get_running_loop().create_task(self._watch())
-            awake = True
-            try:
-                yield
-            except asyncio.CancelledError:
-                # Going away (the process ends, or reconnects): no wake. Should this robot
-                # tick again, its first command wakes it in the world (see the door).
-                awake = False
-                raise
-            finally:
-                watch.cancel()
-                await asyncio.gather(watch, return_exceptions=True)
-                if awake and self._lost is None:
-                    self.readings = await self._guard(self._link.wake())
-        finally:
-            self._idle = False
-            self._pulse()
-
-    async def _watch(self) -> None:
-        def seen(readings: Readings) -> None:
-            if self._tick_of(readings) > self._tick_of(self.readings):
-                self.readings = readings
-
-        with contextlib.suppress(HardwareLost):  # _guard noted it: passed() raises it
-            await self._guard(self._link.watch(seen))
-
-    async def _guard(self, call: Awaitable[Readings | None]) -> Any:
-        try:
-            return await call
-        except HardwareLost as exc:
-            self._lose(exc)
-            raise
-
-    def _lose(self, exc: HardwareLost) -> None:
-        if self._lost is None:
-            self._lost = exc
-        self._pulse()
-
-    def _pulse(self) -> None:
-        self._changed.set()
-        self._changed = asyncio.Event()
-
-    async def _wait_change(self) -> None:
-        await self._changed.wait()
-
-
-def _retrieved(task: asyncio.Task[Any]) -> None:
-    if not task.cancelled():
-        task.exception()  # retrieved: the caller that awaited it, if any, was told
+        frame = read_readings(msg.data) if msg.sender == world else None
+        if frame is not None and frame.tick > tick:
+            readings = own_entry(frame, robot_id)
+            if readings is not None:
+                return readings
