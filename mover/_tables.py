@@ -174,10 +174,15 @@ def shown(value: object) -> str:
 
 def _span(low: float | None, high: float, strict: bool) -> str:
     if low is None:
-        return f"from {-high:g} to {high:g}"
+        return f"from {_num(-high)} to {_num(high)}"
     if strict:
-        return f"> {low:g} and at most {high:g}"
-    return f"from {low:g} to {high:g}"
+        return f"> {_num(low)} and at most {_num(high)}"
+    return f"from {_num(low)} to {_num(high)}"
+
+
+def _num(x: float) -> str:
+    """A bound in words: ``1000000`` rather than ``1e+06``."""
+    return str(int(x)) if x.is_integer() and abs(x) < 1e16 else f"{x:g}"
 
 
 def _real(value: object) -> TypeGuard[int | float]:
@@ -234,6 +239,19 @@ def vector(
             ) from None
 
     return Kind(expected, check)
+
+
+def pair(
+    *, low: float | None = None, high: float = MAX_NUMBER, strict: bool = True
+) -> Kind[tuple[float, float]]:
+    """:func:`vector` of two numbers (a point, a size)."""
+    two = vector(2, low=low, high=high, strict=strict)
+
+    def check(value: object) -> tuple[float, float]:
+        x, y = two.check(value)
+        return (x, y)
+
+    return Kind(two.expected, check)
 
 
 def string(choices: tuple[str, ...] = ()) -> Kind[str]:

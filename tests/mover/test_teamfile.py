@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from mover._up import needs_router
 from mover._keylines import KeyLines
+from mover._up import needs_router
 from mover._up._plan import PEER_MESH_MAX, derive, members, processes, seeds, uses_router
 from mover._up._teamfile import MAX_PROCESSES, TeamFileError, load_team, parse_team
 
