@@ -342,6 +342,8 @@ def json_table(text: str, source: str, error: type[FileError]) -> Table:
         raise error(source, "", problem, line=exc.lineno) from None
     except RecursionError:
         raise error(source, "", "not valid JSON: nested too deeply") from None
+    if not isinstance(data, dict):
+        raise error(source, "", f"must be a JSON object, got {shown(data)}")
     return Table(data, Source(source, error))
 
 
