@@ -50,6 +50,7 @@ class KeyLines:
                     key = tuple(names)
                     self._arrays[key] = self._arrays.get(key, -1) + 1
                     table = (*self._resolve(names[:-1]), names[-1], self._arrays[key])
+                    self._lines.setdefault(table[:-1], number)  # the array: its first header
                 else:
                     table = self._resolve(names)
                 self._lines.setdefault(table, number)

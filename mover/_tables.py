@@ -309,7 +309,8 @@ def read_text(path: Path, error: type[FileError], *, most: int, form: str = "") 
     source = str(path)
     try:
         if path.stat().st_size > most:
-            raise error(source, "", f"is over {most / 2**20:g} MiB")
+            limit = f"{most / 2**20:g} MiB" if most >= 2**20 else f"{most} bytes"
+            raise error(source, "", f"is over {limit}")
         raw = path.read_bytes()
     except OSError as exc:
         raise error(source, "", f"cannot read: {exc.strerror or exc}") from None
