@@ -400,11 +400,10 @@ def _check_ids(spec: WorldSpec, top: Table) -> None:
 def load_world(path: str | Path) -> WorldSpec:
     """Read a ``.toml`` or ``.json`` world file."""
     path = Path(path)
-    source = str(path)
-    if path.suffix == ".toml":
-        text = read_text(path, WorldFileError, most=MAX_FILE_BYTES, form="TOML")
-        return _world(toml_table(text, source, WorldFileError))
-    if path.suffix == ".json":
-        text = read_text(path, WorldFileError, most=MAX_FILE_BYTES, form="JSON")
-        return _world(json_table(text, source, WorldFileError))
-    raise WorldFileError(source, "", "must end in .toml or .json")
+    form = {".toml": "TOML", ".json": "JSON"}.get(path.suffix, "")
+    text = read_text(path, WorldFileError, most=MAX_FILE_BYTES, form=form)
+    if form == "TOML":
+        return _world(toml_table(text, str(path), WorldFileError))
+    if form == "JSON":
+        return _world(json_table(text, str(path), WorldFileError))
+    raise WorldFileError(str(path), "", "must end in .toml or .json")
