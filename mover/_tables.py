@@ -12,7 +12,8 @@ A value is read through a :class:`Kind` (:func:`number`, :func:`integer`, :func:
 :func:`string`, :data:`BOOLEAN`, :data:`NAME`, :data:`MAPPING`), and every number and count is
 bounded where it is read. Why one reader: team files and world files had one each, with other
 words for the same mistakes; a reader's errors are :class:`~mover._exceptions.FileError`
-subclasses of its caller's choosing.
+subclasses of its caller's choosing. What it costs: nothing beyond the decoding on a valid file;
+a TOML file's text is scanned once more for the line only when an error is raised.
 """
 
 from __future__ import annotations
@@ -62,15 +63,16 @@ class Kind(Generic[T]):
 
 @dataclass(frozen=True)
 class Source:
-    """One file being read: its name in messages, its error class, where its keys are written."""
+    """One file being read: its name in messages, its error class, and its TOML text (whose
+    keys' lines are looked up only when an error needs one: a valid file costs no second pass)."""
 
     name: str
     error: type[FileError] = FileError
-    lines: KeyLines | None = None
+    toml: str | None = None
 
     def fail(self, path: KeyPath, problem: str) -> FileError:
         """The error for ``problem`` at the key ``path`` (its line, if the file keeps lines)."""
-        line = self.lines.line(path) if self.lines is not None else None
+        line = KeyLines(self.toml).line(path) if self.toml is not None else None
         return self.error(self.name, dotted(path), problem, line=line)
 
 
@@ -331,7 +333,7 @@ def toml_table(text: str, source: str, error: type[FileError]) -> Table:
         raise error(source, "", f"not valid TOML: {exc}", line=line) from None
     except RecursionError:
         raise error(source, "", "not valid TOML: nested too deeply") from None
-    return Table(data, Source(source, error, KeyLines(text)))
+    return Table(data, Source(source, error, text))
 
 
 def json_table(text: str, source: str, error: type[FileError]) -> Table:
