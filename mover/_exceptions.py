@@ -18,6 +18,11 @@
     ├── MemberLost                 a member of a collective step left before it finished
     ├── NameTaken                  a live member already holds the name a node would take
     ├── ConfigError                a team or transport setting is wrong (also a ValueError)
+    │   └── FileError              a file is wrong: .source, .line, .where (the key), .problem
+    │       ├── TeamFileError      a team file (mover up)
+    │       ├── WorldFileError     a continuous world file, or a robot's settings (sim_hw)
+    │       ├── GridFileError      a grid file (sim_hw.grid)
+    │       └── MazeFileError      a maze file (sim_hw.grid)
     └── NodeClosed                 the node was closed while the operation was pending
 
 Errors cross processes as data (type name and message), never as pickled objects.
@@ -106,6 +111,21 @@ class MemberLost(MoverError):
 
 class ConfigError(MoverError, ValueError):
     """A team or transport setting (from the environment, a flag or a file) is wrong."""
+
+
+class FileError(ConfigError):
+    """A file (or a table of settings) is wrong: ``source``, ``line``, ``where`` and ``problem``.
+
+    Raised by every reader of files (:mod:`mover._tables`), with one wording:
+    ``teams/a.toml:12: robots[1].count: must be from 1 to 200, got 1000``. ``line`` is None
+    where the format keeps no lines (a JSON key) and ``where`` is "" for the file as a whole.
+    Fix the file; the message says where and what was expected.
+    """
+
+    def __init__(self, source: str, where: str, problem: str, *, line: int | None = None) -> None:
+        self.source, self.where, self.problem, self.line = source, where, problem, line
+        at = source if line is None else f"{source}:{line}"
+        super().__init__(f"{at}: {where}: {problem}" if where else f"{at}: {problem}")
 
 
 class NameTaken(MoverError):

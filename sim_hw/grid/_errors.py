@@ -1,19 +1,21 @@
-"""Errors of the grid world.
+"""Errors of the grid world's files, in mover's tree of file errors.
 
 Exception tree::
 
-    ValueError
-    └── GridFileError      a grid file that cannot be read (names file, line/field, problem)
+    mover.ConfigError (a ValueError)
+    └── FileError          a file is wrong: .source, .line, .where, .problem (mover._tables)
+        ├── GridFileError  a grid file (text or JSON) that cannot be read
+        └── MazeFileError  a maze file that cannot be read
 """
 
 from __future__ import annotations
 
+from mover._exceptions import FileError
 
-class GridFileError(ValueError):
-    """A grid file is malformed; the message names the file, the line or field, and the fault."""
 
-    def __init__(self, source: str, where: str, problem: str) -> None:
-        self.source = source
-        self.where = where
-        self.problem = problem
-        super().__init__(f"{source}: {where}: {problem}")
+class GridFileError(FileError):
+    """A grid file is malformed; the message names the file, the line or key, and the fault."""
+
+
+class MazeFileError(FileError):
+    """A maze file is unreadable or malformed; the message names the file, the key and the fault."""

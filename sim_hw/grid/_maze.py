@@ -24,16 +24,15 @@ from pathlib import Path
 
 import numpy as np
 
+from mover._tables import Table, json_table, matrix, read_text, shown
 from robots.grid_hal import FREE, OBSTACLE
 from robots.grid_hal import STAR_RAYS as RAYS
+from sim_hw.grid._errors import MazeFileError as MazeFileError  # its home before the tree
 from sim_hw.grid._grid import Grid
+from sim_hw.grid._io import MAX_FILE_BYTES, MAX_SIDE, free_cell
 from sim_hw.grid._world import GridWorld
 
 _STEPS = ((0, 1), (1, 0), (0, -1), (-1, 0))
-
-
-class MazeFileError(ValueError):
-    """A maze file is unreadable or malformed; the message names the file and the fault."""
 
 
 @dataclass
@@ -188,50 +187,32 @@ def save_maze(path: str | Path, maze: Maze) -> None:
 
 
 def load_maze(path: str | Path) -> Maze:
-    """Read a maze JSON file; raise :class:`MazeFileError` naming the file and the fault."""
+    """Read a maze JSON file; raise :class:`MazeFileError` naming the file, key and fault."""
     p = Path(path)
-    try:
-        data = json.loads(p.read_bytes().decode("utf-8"))
-    except OSError as exc:
-        raise MazeFileError(f"{p}: cannot read: {exc.strerror or exc}") from exc
-    except UnicodeDecodeError as exc:
-        raise MazeFileError(f"{p}: not UTF-8: {exc}") from None
-    except json.JSONDecodeError as exc:
-        raise MazeFileError(f"{p}: not JSON: {exc}") from exc
-    if not isinstance(data, dict) or "grid" not in data:
-        raise MazeFileError(f'{p}: expected an object with a "grid" key')
-    rows = data["grid"]
-    if not isinstance(rows, list) or not rows or not all(isinstance(r, list) for r in rows):
-        raise MazeFileError(f"{p}: grid must be a non-empty list of rows")
-    width = len(rows[0])
-    for i, row in enumerate(rows):
-        if len(row) != width:
-            raise MazeFileError(f"{p}: grid row {i} has {len(row)} cells, row 0 has {width}")
-        bad = [v for v in row if v not in (0, 1) or isinstance(v, bool)]
-        if bad:
-            raise MazeFileError(f"{p}: grid row {i} holds {bad[0]!r}; cells must be 0 or 1")
-    grid = np.array(rows, dtype=np.int8)
-    if grid.shape[0] < 3 or grid.shape[1] < 3:
-        raise MazeFileError(f"{p}: grid is {grid.shape[0]}x{grid.shape[1]}, at least 3x3 needed")
+    t = json_table(
+        read_text(p, MazeFileError, most=MAX_FILE_BYTES, form="JSON"), str(p), MazeFileError
+    )
+    grid = np.array(matrix(t, "grid", (FREE, OBSTACLE), most=MAX_SIDE), dtype=np.int8)
+    rows, cols = grid.shape
+    if rows < 3 or cols < 3:
+        raise t.fail("grid", f"must be at least 3×3 cells, got {rows}×{cols}")
     if not (grid[0].all() and grid[-1].all() and grid[:, 0].all() and grid[:, -1].all()):
-        raise MazeFileError(f"{p}: the border must be obstacles (1)")
-    starts = _parse_starts(p, data.get("starts", []), grid)
+        raise t.fail("grid", "must have obstacles (1) all along its border")
+    starts = _starts(t, grid)
+    t.done()
     return Maze(grid, starts)
 
 
-def _parse_starts(p: Path, raw: object, grid: np.ndarray) -> list[tuple[int, int]]:
-    if not isinstance(raw, list):
-        raise MazeFileError(f"{p}: starts must be a list of [row, col]")
+def _starts(t: Table, grid: np.ndarray) -> list[tuple[int, int]]:
+    raw = t.get("starts") or []
+    if not isinstance(raw, list) or len(raw) > grid.size:
+        raise t.fail(
+            "starts", f"must be a list of [row, col], at most one a cell, got {shown(raw)}"
+        )
     starts: list[tuple[int, int]] = []
     for k, s in enumerate(raw):
-        if not (isinstance(s, list) and len(s) == 2 and all(type(v) is int for v in s)):
-            raise MazeFileError(f"{p}: start {k} is {s!r}, expected [row, col]")
-        r, c = s
-        if not (0 <= r < grid.shape[0] and 0 <= c < grid.shape[1]):
-            raise MazeFileError(f"{p}: start {k} {s} is outside the {grid.shape} grid")
-        if grid[r, c] != FREE:
-            raise MazeFileError(f"{p}: start {k} {s} is an obstacle")
-        if (r, c) in starts:
-            raise MazeFileError(f"{p}: start {k} {s} repeats an earlier start")
-        starts.append((r, c))
+        cell = free_cell(t, ("starts", k), s, grid == OBSTACLE)
+        if cell in starts:
+            raise t.fail(("starts", k), f"{list(cell)} repeats starts[{starts.index(cell)}]")
+        starts.append(cell)
     return starts

@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
+from mover._keylines import KeyLines
 from mover._up import needs_router
-from mover._up._lines import KeyLines
 from mover._up._plan import PEER_MESH_MAX, derive, members, processes, seeds, uses_router
 from mover._up._teamfile import MAX_PROCESSES, TeamFileError, load_team, parse_team
 
@@ -147,7 +147,11 @@ BAD = [
     ),
     ('[team]\nname = "a b"\n', 2, "team.name: bad member name"),
     ('[team]\nname = "a"\nseed = -1\n', 3, "team.seed: must be from 0"),
-    ('[team]\nname = "a"\ntopology = "star"\n', 3, "must be one of auto, peer, router"),
+    (
+        '[team]\nname = "a"\ntopology = "star"\n',
+        3,
+        "team.topology: must be 'auto', 'peer' or 'router', got 'star'",
+    ),
     ('[team]\nname = "a"\n[world]\nfile = "w.toml"\n[world.x]\n', 5, "world.x: unknown key"),
     ('[team]\nname = "a"\nseed = = 1\n', 3, "not valid TOML"),
     ('[tema]\nname = "a"\n', 1, "tema: unknown key (did you mean 'team'?)"),

@@ -171,7 +171,10 @@ async def test_the_world_rejecting_its_file_fails_mover_up_at_once(tmp_path: Pat
     assert time.monotonic() - t0 < 10  # two Python starts on a busy machine; no wait for a bound
     said = [line for line in up.lines if line.startswith("mover up: the world process exited")]
     assert len(said) == 1, up.text
-    assert "world.size: must be at most" in said[0]  # the world's own words
+    # the world's own words
+    assert (
+        "bad.toml:3: world.size: must be a list of 2 numbers, each > 0 and at most 1000" in said[0]
+    )
     assert await gone(up.pids(), 1.0) == []
     assert "Traceback" not in up.text
 

@@ -71,7 +71,10 @@ def test_world_rejects_a_bad_file(tmp_path: Path, capsys: pytest.CaptureFixture)
     bad.write_text("[world]\nsize = [10, -1]\n")
     assert main(["world", str(bad), "--lockstep"]) == 2
     ours = _our_lines(capsys.readouterr().err, "world")
-    assert ours == [f"mover world: {bad}: world.size: must be positive, got [10, -1]"]
+    assert ours == [
+        f"mover world: {bad}:2: world.size: must be a list of 2 numbers, each > 0 and at most "
+        "1000, got [10, -1]"
+    ]
 
 
 def _our_lines(err: str, verb: str) -> list[str]:

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from mover import ConfigError
 from sim_hw import World, WorldFileError, double_corridor, load_world, random_obstacles
 
 WORLDS = sorted((Path(__file__).parents[3] / "worlds").glob("*.[tj]*"))
@@ -50,53 +51,89 @@ def test_double_corridor_lengths() -> None:
 
 
 BAD = [
-    ("world.toml", "[world]\nsize = [10, 'x']\n", "world.size: must be a list of 2 numbers"),
+    # (file, text, line (None: the file as a whole or no line known), what the error says)
+    (
+        "world.toml",
+        "[world]\nsize = [10, 'x']\n",
+        2,
+        "world.size: must be a list of 2 numbers, got [10, 'x']",
+    ),
     (
         "boxes.toml",
         "[world]\nsize = [10, 10]\n[[boxes]]\nid='a'\ncenter=[1,1]\nsize=[1,1]\n"
         "mass=2\n[[boxes]]\nid='b'\ncenter=[2,2]\nsize=[1,1]\nmass=-1\n",
-        "boxes[1].mass: must be > 0, got -1",
+        12,
+        "boxes[1].mass: must be > 0 and at most 1000000, got -1",
     ),
-    ("typo.toml", "[world]\nsize = [10, 10]\n[robot]\nradious = 0.2\n", "radious: unknown field"),
-    ("syntax.toml", "[world]\nsize = [10, 10\n", "not valid TOML"),
-    ("syntax.json", '{"world": {"size": [10, 10]},\n "boxes": [}\n', "line 2: not valid JSON"),
+    (
+        "typo.toml",
+        "[world]\nsize = [10, 10]\n[robot]\nradious = 0.2\n",
+        4,
+        "robot.radious: unknown key (did you mean 'radius'?); known: pose, radius, mass,",
+    ),
+    ("syntax.toml", "[world]\nsize = [10, 10\n", None, "not valid TOML"),
+    ("badkey.toml", "[world]\nsize = [10, 10]\n= 3\n", 3, "not valid TOML"),
+    (
+        "syntax.json",
+        '{"world": {"size": [10, 10]},\n "boxes": [}\n',
+        2,
+        "not valid JSON: Expecting value (column 12)",
+    ),
     (
         "dup.toml",
         "[world]\nsize=[5,5]\n[[targets]]\nid='t'\ncenter=[1,1]\n[[beacons]]\n"
         "id='t'\ncenter=[2,2]\n",
+        7,
         "beacons[0].id: 't' is already used in targets",
     ),
     (
         "shape.toml",
         "[world]\nsize=[5,5]\n[[obstacles]]\nshape='triangle'\n",
+        4,
         "obstacles[0].shape: must be 'box', 'circle' or 'segment', got 'triangle'",
     ),
     (
         "outside.toml",
         "[world]\nsize=[5,5]\n[[robots]]\nid='r'\npose=[6,1,0]\n",
-        "robots[r].pose: (6.0, 1.0) is outside the arena",
+        5,
+        "robots[0].pose: (6.0, 1.0) is outside the arena",
     ),
-    ("gen.toml", "[generator]\nkind='maze'\n", "generator.kind: must be 'random_obstacles' or"),
-    ("noworld.toml", "[[boxes]]\nid='a'\n", "world: is required"),
+    (
+        "gen.toml",
+        "[generator]\nkind='maze'\n",
+        2,
+        "generator.kind: must be 'random_obstacles' or 'double_corridor', got 'maze'",
+    ),
+    ("noworld.toml", "[[boxes]]\nid='a'\n", None, "world: is required (a table with"),
     (
         "sonar.toml",
         "[world]\nsize=[5,5]\n[robot]\nsonar={rays=0}\n",
-        "robot.sonar.rays: must be >= 1, got 0",
+        4,
+        "robot.sonar.rays: must be from 1 to 360, got 0",
     ),
-    ("world.yaml", "world: {}\n", "must end in .toml or .json"),
+    (
+        "many.json",
+        '{"world": {"size": [5, 5]}, "eyebots": [' + ", ".join(["{}"] * 1001) + "]}",
+        None,
+        "eyebots: must hold at most 1000 tables, got 1001",
+    ),
+    ("world.yaml", "world: {}\n", None, "must end in .toml or .json"),
 ]
 
 
-@pytest.mark.parametrize(("name", "text", "message"), BAD, ids=[b[0] for b in BAD])
-def test_bad_files_are_rejected_precisely(tmp_path: Path, name: str, text: str, message: str):
+@pytest.mark.parametrize(("name", "text", "line", "message"), BAD, ids=[b[0] for b in BAD])
+def test_bad_files_are_rejected_precisely(
+    tmp_path: Path, name: str, text: str, line: int | None, message: str
+) -> None:
     path = tmp_path / name
     path.write_text(text)
     with pytest.raises(WorldFileError) as info:
         load_world(path)
     text = str(info.value)
-    assert text.startswith(str(path) + ": ")
-    assert message in text
-    assert isinstance(info.value, ValueError)
+    assert text.startswith(f"{path}: " if line is None else f"{path}:{line}: "), text
+    assert message in text, text
+    assert info.value.line == line
+    assert isinstance(info.value, ValueError) and isinstance(info.value, ConfigError)
 
 
 def test_missing_file(tmp_path: Path) -> None:

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from mover import ConfigError
 from sim_hw.grid import GridFileError, load_grid, load_layout, parse_json, parse_text
 
 
@@ -32,10 +33,10 @@ def test_text_round_trip(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("text", "where", "problem"),
     [
-        ("", "line 1", "empty grid file"),
-        ("#..\n#.\n", "line 2", "row has 2 cells, expected 3"),
-        ("#..\n.x.\n", "line 2, column 2", "unexpected character 'x'"),
-        ("B..\n..B\n", "line 2, column 3", "second base"),
+        ("", "", "is empty: a grid file needs at least one row"),
+        ("#..\n#.\n", ":2", "must be a row of 3 cells (as line 1), got 2"),
+        ("#..\n.x.\n", ":2: column 2", "must be '#' or '.', '1' or '0', 'B' or 'R', got 'x'"),
+        ("B..\n..B\n", ":2: column 3", "a second base 'B' (the first is at line 1, column 1)"),
     ],
 )
 def test_text_errors_are_precise(tmp_path: Path, text: str, where: str, problem: str) -> None:
@@ -44,9 +45,8 @@ def test_text_errors_are_precise(tmp_path: Path, text: str, where: str, problem:
     with pytest.raises(GridFileError) as err:
         load_layout(path)
     msg = str(err.value)
-    assert msg.startswith(f"{path}: {where}: ")
-    assert problem in msg
-    assert isinstance(err.value, ValueError)
+    assert msg == f"{path}{where}: {problem}"
+    assert isinstance(err.value, ValueError) and isinstance(err.value, ConfigError)
     assert err.value.source == str(path)
 
 
@@ -64,20 +64,28 @@ def test_json_full(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("doc", "where", "problem"),
     [
-        ('{"cells": [[0, 1],\n  [0, ]]}', "line 2", "invalid JSON"),
-        ("[1, 2]", "top level", "expected a JSON object"),
-        ('{"cell_size": 1}', "field 'cells'", "missing"),
-        ('{"cells": [[0, 1], [0]]}', "field 'cells[1]'", "row has 1 cells, expected 2"),
-        ('{"cells": [[0, 2]]}', "field 'cells[0][1]'", "expected 0 or 1, got 2"),
-        ('{"cells": [[0]], "cell_size": -1}', "field 'cell_size'", "positive number"),
-        ('{"cells": [[0, 1]], "base": [0, 1]}', "field 'base'", "is an obstacle"),
-        ('{"cells": [[0, 1]], "base": [3, 0]}', "field 'base'", "outside"),
-        ('{"cells": [[0, 0]], "resources": [[0, 0, 0]]}', "field 'resources[0]'", "positive"),
+        ('{"cells": [[0, 1],\n  [0, ]]}', ":2", "not valid JSON: Expecting value (column 7)"),
+        ("[1, 2]", "", "must be a JSON object, got [1, 2]"),
+        ('{"cell_size": 1}', ": cells", "is required (a list of rows)"),
+        ('{"cells": [[0, 1], [0]]}', ": cells[1]", "must be a row of 2 cells (as row 0), got 1"),
+        ('{"cells": [[0, 2]]}', ": cells[0][1]", "must be 0 or 1, got 2"),
+        ('{"cells": [[0]], "cell_size": -1}', ": cell_size", "must be > 0 and at most 1000000"),
+        ('{"cells": [[0, 1]], "base": [0, 1]}', ": base", "[0, 1] is an obstacle"),
+        ('{"cells": [[0, 1]], "base": [3, 0]}', ": base", "[3, 0] is outside the 1×2 grid"),
+        (
+            '{"cells": [[0, 0]], "resources": [[0, 0, 0]]}',
+            ": resources[0]",
+            "must be [row, col, quantity] (a quantity from 1 to 1000000000), got [0, 0, 0]",
+        ),
+        (
+            '{"cells": [[0]], "cel_size": 2}',
+            ": cel_size",
+            "unknown key (did you mean 'cell_size'?); known: cells, cell_size, base, resources",
+        ),
     ],
 )
 def test_json_errors_are_precise(doc: str, where: str, problem: str) -> None:
     with pytest.raises(GridFileError) as err:
         parse_json(doc, "arena.json")
     msg = str(err.value)
-    assert msg.startswith(f"arena.json: {where}: "), msg
-    assert problem in msg
+    assert msg.startswith(f"arena.json{where}: {problem}"), msg

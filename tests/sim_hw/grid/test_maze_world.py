@@ -7,6 +7,7 @@ import json
 import numpy as np
 import pytest
 
+from mover import ConfigError
 from robots.foraging import Action
 from robots.grid_hal import direction_of
 from sim_hw.grid import (
@@ -172,14 +173,37 @@ def test_maze_file_round_trip(tmp_path) -> None:
 @pytest.mark.parametrize(
     ("content", "fault"),
     [
-        ("{", "not JSON"),
-        ('{"starts": []}', '"grid"'),
-        ('{"grid": [[1,1,1],[1,0],[1,1,1]]}', "row 1 has 2 cells"),
-        ('{"grid": [[1,1,1],[1,7,1],[1,1,1]]}', "must be 0 or 1"),
-        ('{"grid": [[1,1,1],[1,0,0],[1,1,1]]}', "border"),
-        ('{"grid": [[1,1,1],[1,0,1],[1,1,1]], "starts": [[0,0]]}', "obstacle"),
-        ('{"grid": [[1,1,1],[1,0,1],[1,1,1]], "starts": [[1]]}', "expected [row, col]"),
-        ('{"grid": [[1,1,1],[1,0,1],[1,1,1]], "starts": [[5,1]]}', "outside"),
+        ("{", ":1: not valid JSON: Expecting property name"),
+        ('{"starts": []}', ": grid: is required (a list of rows)"),
+        (
+            '{"grid": [[1,1,1],[1,0],[1,1,1]]}',
+            ": grid[1]: must be a row of 3 cells (as row 0), got 2",
+        ),
+        ('{"grid": [[1,1,1],[1,7,1],[1,1,1]]}', ": grid[1][1]: must be 0 or 1, got 7"),
+        (
+            '{"grid": [[1,1,1],[1,0,0],[1,1,1]]}',
+            ": grid: must have obstacles (1) all along its border",
+        ),
+        (
+            '{"grid": [[1,1,1],[1,0,1],[1,1,1]], "starts": [[0,0]]}',
+            ": starts[0]: [0, 0] is an obstacle",
+        ),
+        (
+            '{"grid": [[1,1,1],[1,0,1],[1,1,1]], "starts": [[1]]}',
+            ": starts[0]: must be [row, col] (two integers), got [1]",
+        ),
+        (
+            '{"grid": [[1,1,1],[1,0,1],[1,1,1]], "starts": [[5,1]]}',
+            ": starts[0]: [5, 1] is outside the 3×3 grid",
+        ),
+        (
+            '{"grid": [[1,1,1],[1,0,1],[1,1,1]], "starts": [[1,1],[1,1]]}',
+            ": starts[1]: [1, 1] repeats starts[0]",
+        ),
+        (
+            '{"grid": [[1,1,1],[1,0,1],[1,1,1]], "start": []}',
+            ": start: unknown key (did you mean 'starts'?); known: grid, starts",
+        ),
     ],
 )
 def test_bad_maze_files_name_the_file_and_fault(tmp_path, content: str, fault: str) -> None:
@@ -187,8 +211,8 @@ def test_bad_maze_files_name_the_file_and_fault(tmp_path, content: str, fault: s
     path.write_text(content)
     with pytest.raises(MazeFileError) as err:
         load_maze(path)
-    assert str(path) in str(err.value)
-    assert fault in str(err.value)
+    assert str(err.value).startswith(f"{path}{fault}"), err.value
+    assert isinstance(err.value, ConfigError)
 
 
 def test_missing_maze_file(tmp_path) -> None:

@@ -1,10 +1,11 @@
 """Where each key of a TOML file is written: the line of a table header or of a ``key =``.
 
-:mod:`tomllib` gives values without positions, so a team file's errors would otherwise name
-only a field. This reads the text once more, line by line, and maps every key path
-(``("robots", 1, "count")``; an array of tables counts its ``[[...]]`` headers) to the line
-that wrote it. It understands what team files use — headers, bare, quoted and dotted keys,
-comments, multi-line strings and arrays — and falls back to the nearest enclosing key it knows,
+:mod:`tomllib` gives values without positions, so a TOML file's errors (team and world files,
+:mod:`mover._tables`) would otherwise name only a key. This reads the text once more, line by
+line, and maps every key path (``("robots", 1, "count")``; an array of tables counts its
+``[[...]]`` headers, and the array itself is at its first) to the line that wrote it. It
+understands what those files use — headers, bare, quoted and dotted keys, comments, multi-line
+strings and arrays — and falls back to the nearest enclosing key it knows,
 so an odd construct costs precision (a nearby line), never an error.
 """
 
@@ -50,6 +51,7 @@ class KeyLines:
                     key = tuple(names)
                     self._arrays[key] = self._arrays.get(key, -1) + 1
                     table = (*self._resolve(names[:-1]), names[-1], self._arrays[key])
+                    self._lines.setdefault(table[:-1], number)  # the array: its first header
                 else:
                     table = self._resolve(names)
                 self._lines.setdefault(table, number)
