@@ -168,7 +168,7 @@ async def mover_up(request: pytest.FixtureRequest, tmp_path: Path) -> AsyncItera
         key = secrets.token_bytes(32)
         env = {**os.environ, "MOVER_TEAM_KEY": key.hex()}
         env.pop("MOVER_TEAM_KEY_FILE", None)
-        argv = [sys.executable, "-m", "mover._cli", "up", team_file, "--out", str(out), *args]
+        argv = [sys.executable, "-m", "mover", "up", team_file, "--out", str(out), *args]
         proc = await asyncio.create_subprocess_exec(
             *guarded(argv), env=env, cwd=request.path.parent, start_new_session=True,
             stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.STDOUT,

@@ -137,7 +137,7 @@ class Cluster:
     ) -> asyncio.subprocess.Process:
         """Start a lock-step world process (``mover world``) expecting ``expect`` robots."""
         return await self.start(
-            "mover._cli",
+            "mover",
             "world",
             worldfile,
             "--lockstep",

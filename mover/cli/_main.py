@@ -17,10 +17,10 @@ import sys
 from collections.abc import Sequence
 from importlib.metadata import entry_points
 
-from ._exceptions import ConfigError
-from .cli import Terminated, UsageError, add_log_arguments, interrupt_on_sigterm, setup_logging
+from .._exceptions import ConfigError
+from . import Terminated, UsageError, add_log_arguments, interrupt_on_sigterm, setup_logging
 
-__all__ = ["UsageError", "build_parser", "main"]  # UsageError: its old home, kept for imports
+__all__ = ["build_parser", "main"]
 
 log = logging.getLogger("mover.cli")
 
@@ -56,9 +56,3 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         return 130
     return int(code or 0)
-
-
-if __name__ == "__main__":  # python -m mover._cli: use the package's module, not __main__'s
-    from mover._cli import main as _main
-
-    sys.exit(_main())

@@ -20,11 +20,11 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ._cli_verbs import NO_ANSWER, _plain, _statuses, _team_options, observe
-from ._config import NodeConfig, Team
-from ._exceptions import CallError
-from ._keys import check_name
-from .cli import (
+from ._verbs import NO_ANSWER, _plain, _statuses, _team_options, observe
+from .._config import NodeConfig, Team
+from .._exceptions import CallError
+from .._keys import check_name
+from . import (
     UsageError,
     json_object,
     member_name,
@@ -32,7 +32,7 @@ from .cli import (
 )
 
 if TYPE_CHECKING:
-    from ._node import Node
+    from .._node import Node
 
     Sub = argparse._SubParsersAction[argparse.ArgumentParser]
 
@@ -122,7 +122,7 @@ def run_run(args: argparse.Namespace) -> int:
 
 def _progress(node: Node, run: str) -> asyncio.Task[None]:
     """Print the progress reports of run ``run`` as they come (a task; cancel it to stop)."""
-    from ._programs import PROGRESS_TOPIC
+    from .._programs import PROGRESS_TOPIC
 
     progress = node.subscribe(f"{PROGRESS_TOPIC}/{run}")
     started = time.monotonic()
@@ -149,8 +149,8 @@ async def _run(
     robots: list[str] | None,
     kwargs: dict[str, Any],
 ) -> int:
-    from ._node import Node
-    from ._programs import launch, outcomes
+    from .._node import Node
+    from .._programs import launch, outcomes
 
     run = args.run_id or f"{args.program}-{secrets.token_hex(3)}"
     async with Node(
@@ -236,8 +236,8 @@ async def _find_run(
 
 
 async def _attach(team: Team, config: NodeConfig, args: argparse.Namespace) -> int:
-    from ._node import Node
-    from ._programs import outcomes
+    from .._node import Node
+    from .._programs import outcomes
 
     run = args.attach
     async with Node(
@@ -335,8 +335,8 @@ def run_cancel(args: argparse.Namespace) -> int:
 
 
 async def _cancel(team: Team, config: NodeConfig, args: argparse.Namespace) -> int:
-    from ._node import Node
-    from ._programs import CANCEL_WAIT
+    from .._node import Node
+    from .._programs import CANCEL_WAIT
 
     async with Node(
         f"cancel-{secrets.token_hex(3)}", team, kind="tool", config=config, observer=True

@@ -24,9 +24,9 @@ import os
 import signal
 import typing
 
-from ._config import NodeConfig, Team
-from ._keys import check_name as _check_name
-from ._orphans import guarded
+from .._config import NodeConfig, Team
+from .._keys import check_name as _check_name
+from .._orphans import guarded
 
 __all__ = [
     "LOG_LEVEL_ENV",

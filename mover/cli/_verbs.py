@@ -1,5 +1,5 @@
 """The `mover ps`, `mover call`, `mover echo` and `mover keygen` verbs (`mover run`, `runs`
-and `cancel` are in ``mover._cli_runs``).
+and `cancel` are in ``mover.cli._runs``).
 
 Team and transport come from ``--team`` and the MOVER_* environment (see ``mover._config``);
 ``--connect`` adds endpoints to reach the team. Both are :func:`mover.cli.add_team_arguments`'.
@@ -19,10 +19,10 @@ import sys
 import time
 from typing import TYPE_CHECKING, Any
 
-from ._config import NodeConfig, Team
-from ._exceptions import CallError, NotDelivered, UnknownProcedure, WireError
-from ._keys import check_name
-from .cli import (
+from .._config import NodeConfig, Team
+from .._exceptions import CallError, NotDelivered, UnknownProcedure, WireError
+from .._keys import check_name
+from . import (
     UsageError,
     add_team_arguments,
     json_argument,
@@ -32,7 +32,7 @@ from .cli import (
 )
 
 if TYPE_CHECKING:
-    from ._node import Node
+    from .._node import Node
 
     Sub = argparse._SubParsersAction[argparse.ArgumentParser]
 
@@ -122,7 +122,7 @@ async def observe(
 ) -> tuple[list[Any], dict[str, list[dict[str, Any]] | str]]:
     """The team's members as an observer (not a member) sees them after ``wait`` seconds, and
     each one's ``mover.status`` (tools are not asked)."""
-    from ._node import Node
+    from .._node import Node
 
     async with Node(
         f"{tag}-{secrets.token_hex(3)}", team, kind="tool", config=config, observer=True
@@ -215,7 +215,7 @@ async def _call(
     positional: list[Any],
     kwargs: dict[str, Any],
 ) -> int:
-    from ._node import Node
+    from .._node import Node
 
     async with Node(
         f"cli-{secrets.token_hex(3)}", team, kind="tool", config=config, observer=True
@@ -342,7 +342,7 @@ def run_echo(args: argparse.Namespace) -> int:
 
 
 async def _echo(team: Team, config: NodeConfig, args: argparse.Namespace) -> int:
-    from ._node import Node
+    from .._node import Node
 
     where = args.at
     locator = _Fixed(where) if where is not None else None
