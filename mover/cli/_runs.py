@@ -20,7 +20,6 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ._verbs import NO_ANSWER, _plain, _statuses, _team_options, observe
 from .._config import NodeConfig, Team
 from .._exceptions import CallError
 from .._keys import check_name
@@ -28,8 +27,10 @@ from . import (
     UsageError,
     json_object,
     member_name,
+    seed,
     team_from_args,
 )
+from ._verbs import NO_ANSWER, _plain, _statuses, _team_options, observe
 
 if TYPE_CHECKING:
     from .._node import Node
@@ -44,17 +45,6 @@ _STATE_LIMIT = 1 << 20  # bytes of teams.json read at most
 
 
 # -- run ------------------------------------------------------------------------------------------
-
-
-def _seed(text: str) -> int:
-    """An argparse type: a seed, 0 <= seed < 2**63."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
-    if not 0 <= value < 2**63:
-        raise argparse.ArgumentTypeError(f"must be at least 0 and below 2**63, got {text}")
-    return value
 
 
 def register_run(sub: Sub) -> None:
@@ -78,7 +68,7 @@ def register_run(sub: Sub) -> None:
     p.add_argument("--detach", action="store_true", help="exit once the run has started")
     p.add_argument("--run-id", type=member_name, help="name of the run (default: PROGRAM-<random>)")
     p.add_argument(
-        "--seed", type=_seed, help="seed of the run's random choices (default: from the run id)"
+        "--seed", type=seed, help="seed of the run's random choices (default: from the run id)"
     )
     p.add_argument(
         "--share",

@@ -25,6 +25,7 @@ from .._keys import check_name
 from . import (
     UsageError,
     add_team_arguments,
+    bounded,
     json_argument,
     json_object,
     positive,
@@ -49,18 +50,11 @@ def _team_options(p: argparse.ArgumentParser) -> None:
     add_team_arguments(p)
     p.add_argument(
         "--wait",
-        type=_wait,
+        type=bounded(float, 0.0, MAX_WAIT, above=True),
         default=2.0,
         metavar="S",
         help="seconds to wait for the team to be discovered (default 2, at most 3600)",
     )
-
-
-def _wait(text: str) -> float:
-    value = positive(text)
-    if value > MAX_WAIT:
-        raise argparse.ArgumentTypeError(f"must be at most {MAX_WAIT:g} s, got {text}")
-    return value
 
 
 # -- ps -------------------------------------------------------------------------------------------
@@ -307,7 +301,10 @@ def register_echo(sub: Sub) -> None:
         " reach it, with distance and bearing",
     )
     p.add_argument(
-        "--count", type=_count, default=0, help="stop after N messages (default: until Ctrl-C)"
+        "--count",
+        type=bounded(int, 0, 1_000_000),
+        default=0,
+        help="stop after N messages (default: until Ctrl-C)",
     )
     p.add_argument("--json", action="store_true", help="one JSON object per message")
     _team_options(p)
@@ -322,16 +319,6 @@ def _pose(text: str) -> tuple[float, float, float]:
     if len(parts) not in (2, 3) or not all(math.isfinite(v) for v in parts):
         raise argparse.ArgumentTypeError(f"expected X,Y[,HEADING] (finite), got {text!r}")
     return (parts[0], parts[1], parts[2] if len(parts) == 3 else 0.0)
-
-
-def _count(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
-    if not 0 <= value <= 1_000_000:
-        raise argparse.ArgumentTypeError(f"must be from 0 to 1000000, got {text}")
-    return value
 
 
 def run_echo(args: argparse.Namespace) -> int:
