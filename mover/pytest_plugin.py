@@ -89,7 +89,8 @@ async def mover_cluster(
             await asyncio.gather(watch, return_exceptions=True)
         exited = c.exited()
     if exited and not request.node.stash.get(_CALL_FAILED, False):
-        pytest.fail(f"{exited[0]} while the test ran (its log is in the report)", pytrace=False)
+        why = f"{exited[0].brief} while the test ran (its log is in the report)"
+        pytest.fail(why, pytrace=False)
 
 
 @pytest_asyncio.fixture
@@ -229,7 +230,8 @@ async def _ready(c: Cluster, node: Node, names: Sequence[str]) -> None:
     if died in done and not died.cancelled() and died.exception() is None:
         exit_ = died.result()
         c.claimed.add(exit_.label)  # reported here: the watcher leaves the test alone
-        pytest.fail(f"{exit_} before {', '.join(names)} were ready:\n{exit_.tail}", pytrace=False)
+        why = f"{exit_.brief} before {', '.join(names)} were ready:\n{exit_.tail}"
+        pytest.fail(why, pytrace=False)
     if waiting in done and waiting.exception() is not None:
         missing = [n for n in names if n not in node.team]
         pytest.fail(
@@ -258,7 +260,7 @@ async def _watch(c: Cluster, test: Callable[[], asyncio.Task[Any] | None]) -> No
     await asyncio.sleep(0.1)  # a process that dies while it starts is reported by _ready
     task = test()
     if exit_.label not in c.claimed and task is not None and not task.done():
-        task.cancel(f"{exit_}")
+        task.cancel(exit_.brief)
 
 
 @pytest.hookimpl(wrapper=True)
@@ -282,7 +284,7 @@ def pytest_runtest_makereport(
             and call.excinfo is not None
             and call.excinfo.errisinstance(asyncio.CancelledError)
         ):
-            report.longrepr = f"{exits[0]} while the test ran: the test was stopped there"
+            report.longrepr = f"{exits[0].brief} while the test ran: the test was stopped there"
         for label, path in c.logs_written():
             try:
                 lines = path.read_text(errors="replace").splitlines()
@@ -290,5 +292,5 @@ def pytest_runtest_makereport(
                 continue
             report.sections.append((f"mover log: {label}", "\n".join(lines[-LOG_TAIL:])))
         for exit_ in c.exited():
-            report.sections.append(("mover: a process exited", str(exit_)))
+            report.sections.append(("mover: a process exited", exit_.brief))
     return report
