@@ -170,7 +170,7 @@ class Cluster:
     def kill(self, proc: asyncio.subprocess.Process, sig: int = signal.SIGKILL) -> None:
         """End ``proc`` on purpose (a test of a lost member, say): its exit is not a failure."""
         self._ended.add(proc.pid)
-        self._children[proc.pid].signal(sig)
+        (self._children.get(proc.pid) or Child("", proc, None, group=False)).signal(sig)
 
     async def stop(self) -> None:
         """Kill every process started (and wait for them, at most ``STOP_WAIT`` s)."""
