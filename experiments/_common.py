@@ -1,6 +1,7 @@
-"""What the experiment runners share: the progress line, mean ± sd / se, comma lists.
+"""What the experiment runners share: the progress line, mean ± sd / se, comma lists, and
+their ``--runs``, ``--seed`` and ``--workers``.
 
-One copy each (the two runners had written their own). The progress line goes to stderr, so
+One copy each (the runners had written their own). The progress line goes to stderr, so
 that stdout holds only the report, the same for the same seeds.
 """
 
@@ -8,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import secrets
 import sys
 import time
 from collections.abc import Callable, Iterable, Sequence
@@ -15,6 +17,8 @@ from dataclasses import dataclass
 from typing import TypeVar
 
 import numpy as np
+
+from mover.cli import MAX_SEED, UsageError, bounded
 
 T = TypeVar("T")
 
@@ -139,3 +143,57 @@ def runner_parser(
     return sub.add_parser(
         name, help=help, description=doc, formatter_class=argparse.RawDescriptionHelpFormatter
     )
+
+
+MAX_RUNS = 100_000
+"""The most runs a point (row, cell) may be given."""
+MAX_WORKERS = 64
+"""The most worker processes a runner may start."""
+
+
+def add_run_arguments(
+    parser: argparse.ArgumentParser,
+    *,
+    runs: int | None,
+    seed: int | None,
+    workers: int | None = None,
+    runs_default: str | None = None,
+) -> None:
+    """``--runs N``, ``--seed N`` and (unless ``workers`` is None) ``--workers N``, with the
+    runner's defaults (``seed`` None: a random one; ``runs_default`` says what a ``runs`` of
+    None means). :func:`read_run_arguments` checks them."""
+    said = f"default {runs}" if runs_default is None else f"default: {runs_default}"
+    parser.add_argument("--runs", type=int, default=runs, help=f"runs per point ({said})")
+    said = "default: random" if seed is None else f"default {seed}"
+    parser.add_argument("--seed", type=int, default=seed, help=f"master seed ({said})")
+    if workers is not None:
+        parser.add_argument(
+            "--workers", type=int, default=workers, help=f"worker processes (default {workers})"
+        )
+
+
+@dataclass(frozen=True)
+class RunArguments:
+    """:func:`add_run_arguments`' options, checked: runs (None: the runner decides), the
+    master seed (drawn when not given), worker processes (1 for a runner without)."""
+
+    runs: int | None
+    seed: int
+    workers: int
+
+
+def read_run_arguments(args: argparse.Namespace) -> RunArguments:
+    """The checked ``--runs``, ``--seed`` and ``--workers`` of ``args`` (a seed drawn at random
+    when none was given); raises :class:`~mover.cli.UsageError` naming what is wrong."""
+    runs = None if args.runs is None else _checked("--runs", args.runs, 1, MAX_RUNS)
+    seed = secrets.randbits(32) if args.seed is None else _checked("--seed", args.seed, 0, MAX_SEED)
+    workers = getattr(args, "workers", None)
+    workers = 1 if workers is None else _checked("--workers", workers, 1, MAX_WORKERS)
+    return RunArguments(runs, seed, workers)
+
+
+def _checked(option: str, value: int, low: int, high: int) -> int:
+    try:
+        return bounded(int, low, high)(str(value))
+    except argparse.ArgumentTypeError as exc:  # the wording of every bounded option
+        raise UsageError(f"{option} {exc}") from None

@@ -25,9 +25,8 @@ log = logging.getLogger(__name__)
 
 
 def add_saved_arguments(parser: argparse.ArgumentParser, default_save: str) -> None:
-    """``--workers``, ``--save DIR``, ``--no-save``, ``--json`` and ``--quiet``: the options of
-    a runner whose runs are saved per point."""
-    parser.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
+    """``--save DIR``, ``--no-save``, ``--json`` and ``--quiet``: the options of a runner whose
+    runs are saved per point (its ``--workers`` comes with ``--runs``, from ``_common``)."""
     parser.add_argument(
         "--save",
         type=Path,

@@ -22,7 +22,15 @@ from pathlib import Path
 from typing import Any
 
 from mover import PROGRESS_TOPIC
-from mover._up import Stopped, Supervisor, TeamFileError, TeamPlan, UpError, load_team
+from mover._up import (
+    ProcessExited,
+    Stopped,
+    Supervisor,
+    TeamFileError,
+    TeamPlan,
+    UpError,
+    load_team,
+)
 from mover.cli import UsageError, json_object, positive
 from sim_hw import STATE_TOPIC, WorldFileError, load_world
 
@@ -154,7 +162,7 @@ async def demo(s: DemoSettings, plan: TeamPlan) -> int:
     except TimeoutError:
         print(f"mover demo: no result within {s.timeout} s", file=sys.stderr)
         return 1
-    except UpError as exc:  # a process exited, or the team did not come up
+    except (UpError, ProcessExited) as exc:  # the team did not come up, or a process exited
         print(f"mover demo: {exc}", file=sys.stderr)
         return 1
     except Stopped:

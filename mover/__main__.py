@@ -2,7 +2,7 @@
 
 import sys
 
-from mover._cli import main
+from mover.cli._main import main
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -1,64 +1,17 @@
-"""The `mover` command's frame.
+"""The old home of the ``mover`` command's frame, now :mod:`mover.cli` (``mover.cli._main``).
 
-Verbs are gathered from the ``mover.commands`` entry-point group, as the ``ros2`` command gathers
-its verbs, so that this package imports none of the packages that provide them. Each entry point
-is a ``register(subparsers)`` function that adds one sub-parser and sets ``func`` — a callable
-taking the parsed arguments and returning an exit code. ``python -m mover`` is the same command.
-
-The helpers verbs share (team and logging options, :class:`UsageError`) are public, in
-:mod:`mover.cli`.
+Kept so that ``python -m mover._cli VERB`` (how ``mover up`` and scripts start processes) and
+``from mover._cli import main, UsageError`` go on working; new code uses ``python -m mover``.
 """
 
 from __future__ import annotations
 
-import argparse
-import logging
 import sys
-from collections.abc import Sequence
-from importlib.metadata import entry_points
 
-from ._exceptions import ConfigError
-from .cli import Terminated, UsageError, add_log_arguments, interrupt_on_sigterm, setup_logging
+from .cli import UsageError
+from .cli._main import build_parser, main
 
-__all__ = ["UsageError", "build_parser", "main"]  # UsageError: its old home, kept for imports
+__all__ = ["UsageError", "build_parser", "main"]
 
-log = logging.getLogger("mover.cli")
-
-
-def build_parser() -> argparse.ArgumentParser:
-    """The full parser, with every verb that loads."""
-    parser = argparse.ArgumentParser(
-        prog="mover", description="Program a team of mobile robots as one distributed program."
-    )
-    add_log_arguments(parser)
-    sub = parser.add_subparsers(dest="verb", metavar="VERB", required=True)
-    for ep in sorted(entry_points(group="mover.commands"), key=lambda e: e.name):
-        try:
-            ep.load()(sub)
-        except Exception as exc:  # one broken verb must not take the others down
-            print(f"mover: verb {ep.name!r} is unavailable: {exc}", file=sys.stderr)
-    return parser
-
-
-def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``mover`` console script."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    interrupt_on_sigterm()
-    try:
-        setup_logging(args)
-        code = args.func(args)
-    except (UsageError, ConfigError) as exc:  # a setting is wrong: one line, no traceback
-        print(f"mover {args.verb}: {exc}", file=sys.stderr)
-        return 2
-    except Terminated:
-        return 143
-    except KeyboardInterrupt:
-        return 130
-    return int(code or 0)
-
-
-if __name__ == "__main__":  # python -m mover._cli: use the package's module, not __main__'s
-    from mover._cli import main as _main
-
-    sys.exit(_main())
+if __name__ == "__main__":  # python -m mover._cli: the package's function, not __main__'s copy
+    sys.exit(main())

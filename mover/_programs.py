@@ -53,6 +53,7 @@ from ._exceptions import (
     UnknownProcedure,
     UnknownRobot,
 )
+from ._futures import failure
 from ._signature import Signature
 
 if TYPE_CHECKING:
@@ -103,7 +104,7 @@ class _Run:
             return "running"
         if self.task.cancelled():
             return "failed" if self.failed is not None else "cancelled"
-        return "failed" if self.task.exception() is not None else "done"
+        return "failed" if failure(self.task) is not None else "done"
 
     def status(self) -> dict[str, Any]:
         """What mover.status says of this run."""
@@ -208,7 +209,7 @@ class ProgramHost:
         task = asyncio.get_running_loop().create_task(
             self._run(fn, team, positional, kwargs, members)
         )
-        task.add_done_callback(_retrieved)  # its outcome is asked for by mover.outcome, if at all
+        task.add_done_callback(failure)  # its outcome is asked for by mover.outcome, if at all
         task.add_done_callback(lambda _: self.collectives.end_run(run))
         self.runs[run] = _Run(program, task, team, share=share)
         while len(self.runs) > HISTORY:  # the oldest finished run goes (running ones stay)
@@ -430,8 +431,3 @@ def _expected(exc: BaseException) -> bool:
     """Whether a run's failure is a fault it could expect (mover's errors, or an exception
     whose class says ``expected = True``, as a lost hardware's does), not a bug."""
     return isinstance(exc, MoverError) or bool(getattr(exc, "expected", False))
-
-
-def _retrieved(task: asyncio.Task[Any]) -> None:
-    if not task.cancelled():
-        task.exception()  # retrieved: a failed run nobody asked about is not an error at exit

@@ -52,8 +52,11 @@ import pytest
 import pytest_asyncio
 
 from ._config import NodeConfig, Team
+from ._futures import failure
 from ._node import Node
-from ._orphans import guarded
+from ._procs import Child
+from ._procs import start as start_process
+from ._procs import stop as stop_processes
 from .testing import Cluster, cluster
 
 READY_TIMEOUT = 60.0
@@ -89,7 +92,8 @@ async def mover_cluster(
             await asyncio.gather(watch, return_exceptions=True)
         exited = c.exited()
     if exited and not request.node.stash.get(_CALL_FAILED, False):
-        pytest.fail(f"{exited[0]} while the test ran (its log is in the report)", pytrace=False)
+        why = f"{exited[0].brief} while the test ran (its log is in the report)"
+        pytest.fail(why, pytrace=False)
 
 
 @pytest_asyncio.fixture
@@ -159,7 +163,7 @@ class UpTeam:
 @pytest_asyncio.fixture
 async def mover_up(request: pytest.FixtureRequest, tmp_path: Path) -> AsyncIterator[Starter]:
     """``await mover_up(team_file, *args)``: a team from a team file, ready (see the module)."""
-    started: list[tuple[asyncio.subprocess.Process, Node]] = []
+    started: list[tuple[Child, Node]] = []
     logs = request.node.stash.setdefault(_UP_LOGS, [])
 
     async def start(team_file: str, *args: str) -> UpTeam:
@@ -168,11 +172,12 @@ async def mover_up(request: pytest.FixtureRequest, tmp_path: Path) -> AsyncItera
         key = secrets.token_bytes(32)
         env = {**os.environ, "MOVER_TEAM_KEY": key.hex()}
         env.pop("MOVER_TEAM_KEY_FILE", None)
-        argv = [sys.executable, "-m", "mover._cli", "up", team_file, "--out", str(out), *args]
-        proc = await asyncio.create_subprocess_exec(
-            *guarded(argv), env=env, cwd=request.path.parent, start_new_session=True,
-            stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.STDOUT,
+        argv = [sys.executable, "-m", "mover", "up", team_file, "--out", str(out), *args]
+        child = await start_process(
+            f"mover up {team_file}", argv, env=env, log=None, pump=True,
+            cwd=request.path.parent, own_session=True,
         )  # fmt: skip
+        proc = child.proc
         lines: list[str] = []
         assert proc.stdout is not None
         try:
@@ -191,7 +196,7 @@ async def mover_up(request: pytest.FixtureRequest, tmp_path: Path) -> AsyncItera
         config = NodeConfig(mode="client" if router else "peer", connect=(endpoint,))
         node = Node(f"test-{secrets.token_hex(2)}", Team(name, key), kind="tool", config=config)
         await node.__aenter__()
-        started.append((proc, node))
+        started.append((child, node))
         # ready by membership here too: every process mover up started (a log each; the
         # router is no member) is seen by the test's node before the test goes on
         names = [p.stem for p in out.glob("*.log") if p.stem != "router"]
@@ -205,15 +210,9 @@ async def mover_up(request: pytest.FixtureRequest, tmp_path: Path) -> AsyncItera
     try:
         yield start
     finally:
-        for proc, node in started:
+        for child, node in started:
             await node.__aexit__(None, None, None)
-            if proc.returncode is None:
-                proc.send_signal(signal.SIGINT)
-            try:
-                await asyncio.wait_for(proc.wait(), 20)
-            except TimeoutError:
-                proc.kill()
-                await proc.wait()
+            await stop_processes([child], [(signal.SIGINT, 20.0), (signal.SIGKILL, 20.0)])
 
 
 async def _ready(c: Cluster, node: Node, names: Sequence[str]) -> None:
@@ -226,11 +225,12 @@ async def _ready(c: Cluster, node: Node, names: Sequence[str]) -> None:
         for f in (waiting, died):
             f.cancel()
         await asyncio.gather(waiting, died, return_exceptions=True)
-    if died in done and not died.cancelled() and died.exception() is None:
+    if died in done and not died.cancelled() and failure(died) is None:
         exit_ = died.result()
         c.claimed.add(exit_.label)  # reported here: the watcher leaves the test alone
-        pytest.fail(f"{exit_} before {', '.join(names)} were ready:\n{exit_.tail}", pytrace=False)
-    if waiting in done and waiting.exception() is not None:
+        why = f"{exit_.brief} before {', '.join(names)} were ready:\n{exit_.tail}"
+        pytest.fail(why, pytrace=False)
+    if waiting in done and failure(waiting) is not None:
         missing = [n for n in names if n not in node.team]
         pytest.fail(
             f"{', '.join(missing)} did not become members within {READY_TIMEOUT:g} s",
@@ -258,7 +258,7 @@ async def _watch(c: Cluster, test: Callable[[], asyncio.Task[Any] | None]) -> No
     await asyncio.sleep(0.1)  # a process that dies while it starts is reported by _ready
     task = test()
     if exit_.label not in c.claimed and task is not None and not task.done():
-        task.cancel(f"{exit_}")
+        task.cancel(exit_.brief)
 
 
 @pytest.hookimpl(wrapper=True)
@@ -282,7 +282,7 @@ def pytest_runtest_makereport(
             and call.excinfo is not None
             and call.excinfo.errisinstance(asyncio.CancelledError)
         ):
-            report.longrepr = f"{exits[0]} while the test ran: the test was stopped there"
+            report.longrepr = f"{exits[0].brief} while the test ran: the test was stopped there"
         for label, path in c.logs_written():
             try:
                 lines = path.read_text(errors="replace").splitlines()
@@ -290,5 +290,5 @@ def pytest_runtest_makereport(
                 continue
             report.sections.append((f"mover log: {label}", "\n".join(lines[-LOG_TAIL:])))
         for exit_ in c.exited():
-            report.sections.append(("mover: a process exited", str(exit_)))
+            report.sections.append(("mover: a process exited", exit_.brief))
     return report

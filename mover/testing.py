@@ -23,27 +23,18 @@ import os
 import signal
 import sys
 from collections.abc import AsyncIterator, Callable, Mapping
-from contextlib import asynccontextmanager, suppress
+from contextlib import asynccontextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from ._config import NodeConfig, Team, free_port
 from ._node import Node
-from ._orphans import guarded
+from ._procs import Child, ProcessExited, start, stop
 from ._programs import ProgramHost
 
-
-@dataclass(frozen=True)
-class ProcessExited:
-    """A process of a cluster that exited on its own: its label, exit code and last log lines."""
-
-    label: str
-    returncode: int
-    tail: str = ""
-
-    def __str__(self) -> str:
-        return f"{self.label} exited with code {self.returncode}"
+STOP_WAIT = 10.0
+"""Seconds :meth:`Cluster.stop` waits for its killed processes."""
 
 
 @dataclass
@@ -59,7 +50,7 @@ class Cluster:
     cwd: Path = field(default_factory=Path.cwd)
     env: dict[str, str] = field(default_factory=dict)
     logs: Path | None = None
-    _labels: dict[int, tuple[str, Path | None]] = field(default_factory=dict)
+    _children: dict[int, Child] = field(default_factory=dict)
     _ended: set[int] = field(default_factory=set)  # ended by the test or by stop()
     _exits: list[ProcessExited] = field(default_factory=list)
     _exit_seen: asyncio.Event | None = None
@@ -104,23 +95,19 @@ class Cluster:
             self.logs.mkdir(parents=True, exist_ok=True)
             log = self.logs / f"{_file_name(label)}.log"
         env = {**os.environ, **self.env, **(team or self.team).env(), **(config or self.peer).env()}
-        # the child gets its own copy of the file: ours is closed at once
         err = open(log, "ab") if log is not None else None  # noqa: ASYNC230, SIM115
-        try:
-            proc = await asyncio.create_subprocess_exec(
-                *guarded([sys.executable, "-m", module, *args]),
-                stdin=asyncio.subprocess.PIPE,
-                stdout=asyncio.subprocess.PIPE,
-                stderr=err,
-                env=env,
-                cwd=self.cwd,
-            )
-        finally:
-            if err is not None:
-                err.close()
+        child = await start(
+            label,
+            [sys.executable, "-m", module, *args],
+            env=env,
+            log=err,  # written by the child itself: kept even if this process is killed
+            stdin=asyncio.subprocess.PIPE,  # serve_programs() runs until it closes
+            cwd=self.cwd,
+        )
+        proc = child.proc
         self.procs.append(proc)
-        self._labels[proc.pid] = (label, Path(log) if log is not None else None)
-        self._watchers.append(asyncio.get_running_loop().create_task(self._watch(proc)))
+        self._children[proc.pid] = child
+        self._watchers.append(asyncio.get_running_loop().create_task(self._watch(child)))
         if ready is None:
             return proc
         assert proc.stdout is not None
@@ -137,7 +124,7 @@ class Cluster:
     ) -> asyncio.subprocess.Process:
         """Start a lock-step world process (``mover world``) expecting ``expect`` robots."""
         return await self.start(
-            "mover._cli",
+            "mover",
             "world",
             worldfile,
             "--lockstep",
@@ -155,12 +142,11 @@ class Cluster:
             )
         )
 
-    async def _watch(self, proc: asyncio.subprocess.Process) -> None:
-        code = await proc.wait()
-        if proc.pid in self._ended:
+    async def _watch(self, child: Child) -> None:
+        code = await child.proc.wait()
+        if child.proc.pid in self._ended:
             return
-        label, log = self._labels[proc.pid]
-        self._exits.append(ProcessExited(label, code, _tail(log)))
+        self._exits.append(child.exited(code))
         self._exit_event().set()
 
     def _exit_event(self) -> asyncio.Event:
@@ -179,31 +165,20 @@ class Cluster:
 
     def logs_written(self) -> list[tuple[str, Path]]:
         """(label, log file) of every process that logs to a file."""
-        return [(label, log) for label, log in self._labels.values() if log is not None]
+        return [(c.name, c.log) for c in self._children.values() if c.log is not None]
 
     def kill(self, proc: asyncio.subprocess.Process, sig: int = signal.SIGKILL) -> None:
         """End ``proc`` on purpose (a test of a lost member, say): its exit is not a failure."""
         self._ended.add(proc.pid)
-        if proc.returncode is None:
-            with suppress(ProcessLookupError):
-                proc.send_signal(sig)
+        (self._children.get(proc.pid) or Child("", proc, None, group=False)).signal(sig)
 
     async def stop(self) -> None:
-        """Kill every process started (and wait for them)."""
+        """Kill every process started (and wait for them, at most ``STOP_WAIT`` s)."""
         self._ended.update(p.pid for p in self.procs)
-        for proc in self.procs:
-            if proc.returncode is None:
-                try:
-                    proc.send_signal(signal.SIGCONT)
-                    proc.kill()
-                except ProcessLookupError:
-                    pass
-        for proc in self.procs:
-            try:
-                async with asyncio.timeout(10):
-                    await proc.wait()
-            except TimeoutError:
-                pass
+        children = list(self._children.values())
+        for c in children:
+            c.signal(signal.SIGCONT)  # a test may have stopped it (SIGSTOP)
+        await stop(children, [(signal.SIGKILL, STOP_WAIT)])  # a test's processes need no grace
         for task in self._watchers:
             task.cancel()
         await asyncio.gather(*self._watchers, return_exceptions=True)
@@ -211,15 +186,6 @@ class Cluster:
 
 def _file_name(label: str) -> str:
     return "".join(c if c.isalnum() or c in "-_." else "_" for c in label)[:60]
-
-
-def _tail(log: Path | None, lines: int = 20) -> str:
-    if log is None:
-        return ""
-    try:
-        return "\n".join(log.read_text(errors="replace").splitlines()[-lines:])
-    except OSError:
-        return ""
 
 
 @asynccontextmanager

@@ -21,7 +21,7 @@ from collections.abc import Callable
 from typing import Any
 
 from mover import MoverError
-from mover.cli import member_name, positive
+from mover.cli import bounded, member_name, positive
 from sim_hw._frames import read_command, readings_frame, topics
 from sim_hw._lockstep import LockstepDoor, RobotDropped
 
@@ -40,26 +40,10 @@ MAX_RATE = 1000.0
 """The most a rate read from a command line may be (per simulated second)."""
 
 
-def count(text: str) -> int:
-    """An argparse type: a whole number from 0 to MAX_COUNT."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
-    if not 0 <= value <= MAX_COUNT:
-        raise argparse.ArgumentTypeError(f"must be from 0 to {MAX_COUNT}, got {text}")
-    return value
-
-
-def rate(text: str) -> float:
-    """An argparse type: a number from 0 to MAX_RATE."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not 0 <= value <= MAX_RATE:  # NaN too
-        raise argparse.ArgumentTypeError(f"must be a number from 0 to {MAX_RATE:g}, got {text}")
-    return value
+count = bounded(int, 0, MAX_COUNT)
+"""An argparse type: a whole number from 0 to MAX_COUNT."""
+rate = bounded(float, 0.0, MAX_RATE)
+"""An argparse type: a number from 0 to MAX_RATE."""
 
 
 def add_world_arguments(

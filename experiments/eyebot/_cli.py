@@ -5,12 +5,11 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import secrets
 import time
 
 from mover.cli import UsageError
 
-from .._common import comma_list, runner_parser
+from .._common import add_run_arguments, comma_list, read_run_arguments, runner_parser
 from .._figures import add_figure_arguments
 from .._saved import add_saved_arguments
 from . import _report
@@ -23,7 +22,6 @@ _TABLES = {
     "fig5": _report.fig5,
     "beyond": _report.beyond,
 }
-MAX_RUNS = 1000
 MAX_DURATION = 100_000.0
 
 
@@ -39,8 +37,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         default=["fig2"],
         help="comma list of fig2, fig3, fig4, fig5, beyond (default fig2)",
     )
-    parser.add_argument("--runs", type=int, default=30, help="runs per point (default 30)")
-    parser.add_argument("--seed", type=int, default=None, help="master seed (default: random)")
+    add_run_arguments(parser, runs=30, seed=None, workers=2)
     parser.add_argument(
         "--duration", type=float, default=3000.0, help="simulated seconds a run (default 3000)"
     )
@@ -57,10 +54,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 def settings(args: argparse.Namespace) -> EyebotSettings:
     """The settings the command line asks for, checked; raises
     :class:`~mover.cli.UsageError` naming what is wrong."""
-    if not 1 <= args.runs <= MAX_RUNS:
-        raise UsageError(f"--runs must be from 1 to {MAX_RUNS}, got {args.runs}")
-    if not 1 <= args.workers <= 64:
-        raise UsageError(f"--workers must be from 1 to 64, got {args.workers}")
+    given = read_run_arguments(args)
     if not (math.isfinite(args.duration) and 10.0 <= args.duration <= MAX_DURATION):
         raise UsageError(f"--duration must be from 10 to {MAX_DURATION:g} s, got {args.duration}")
     save = None if args.no_save else args.save
@@ -69,11 +63,11 @@ def settings(args: argparse.Namespace) -> EyebotSettings:
     if save is not None and args.duration != 3000.0:  # runs of other lengths are kept apart
         save = save.with_name(f"{save.name}-duration={args.duration:g}")
     return EyebotSettings(
-        seed=secrets.randbits(32) if args.seed is None else args.seed,
+        seed=given.seed,
         runs=args.runs,
         figures=tuple(args.figure),
         duration=args.duration,
-        workers=args.workers,
+        workers=given.workers,
         save=save,
         progress=not args.quiet,
         saved_only=args.saved,

@@ -12,7 +12,7 @@ from typing import Any
 from mover.cli import UsageError
 from robots.foraging import TRAIL_COLOURS
 
-from .._common import comma_list, runner_parser
+from .._common import add_run_arguments, comma_list, read_run_arguments, runner_parser
 from .._figures import add_figure_arguments
 from ._model import load_times, model_rows, paper_times, pooled, report
 from ._paper import PAPER_T1, PAPER_T2, PAPER_T3
@@ -34,15 +34,9 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         help="which table (ants = Figure 9, c-marking vs ants; model = the T = a*D + b*TB fit of "
         "Tables 1-3); default all (not the model)",
     )
-    p.add_argument(
-        "--runs",
-        type=int,
-        default=None,
-        help="runs per row; default: until the SE is <= 5 %% of the mean",
-    )
+    add_run_arguments(p, runs=None, seed=2007, runs_default="until the SE is <= 5 %% of the mean")
     p.add_argument("--min-runs", type=int, default=30, help="adaptive mode: at least (30)")
     p.add_argument("--max-runs", type=int, default=1000, help="adaptive mode: at most (1000)")
-    p.add_argument("--seed", type=int, default=2007, help="master seed (2007)")
     p.add_argument(
         "--agents",
         type=comma_list(int),
@@ -121,8 +115,7 @@ MAX_SIZE = 1000
 def settings(args: argparse.Namespace) -> ForagingSettings:
     """The settings the command line asks for, checked; raises
     :class:`~mover.cli.UsageError` naming what is wrong."""
-    if args.runs is not None and args.runs < 1:
-        raise UsageError("--runs must be positive")
+    given = read_run_arguments(args)
     if not 1 <= args.min_runs <= args.max_runs:
         raise UsageError("--min-runs must be positive and at most --max-runs")
     if min(args.agents or [1]) < 1 or min(args.sizes or [5]) < 5:
@@ -146,9 +139,9 @@ def settings(args: argparse.Namespace) -> ForagingSettings:
             raise UsageError(f"--fit {label}: no file {missing[0]}")
         fits.append((label, tuple(files.split(","))))
     return ForagingSettings(
-        seed=args.seed,
+        seed=given.seed,
         table=args.table,
-        runs=args.runs,
+        runs=given.runs,
         min_runs=args.min_runs,
         max_runs=args.max_runs,
         agents=tuple(args.agents or ()),

@@ -5,14 +5,13 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import secrets
 import time
 from dataclasses import replace
 
 from mover.cli import UsageError
 from robots.library import METHODS, LevyParams
 
-from .._common import comma_list, runner_parser
+from .._common import add_run_arguments, comma_list, read_run_arguments, runner_parser
 from .._figures import add_figure_arguments
 from .._saved import add_saved_arguments
 from ._paper import ALPHA_TARGETS, ALPHAS, FIG8_TARGETS, FIG9_ROBOTS, Setup
@@ -42,8 +41,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         default=["fig8", "fig9"],
         help="comma list of fig8, fig9, alpha (default fig8,fig9)",
     )
-    parser.add_argument("--runs", type=int, default=50, help="trials per point (default 50)")
-    parser.add_argument("--seed", type=int, default=None, help="master seed (default: random)")
+    add_run_arguments(parser, runs=50, seed=None, workers=2)
     parser.add_argument(
         "--methods",
         type=comma_list(str, METHODS),
@@ -94,10 +92,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 def settings(args: argparse.Namespace) -> LevySettings:
     """The settings the command line asks for, checked. Raises
     :class:`~mover.cli.UsageError` naming what is wrong."""
-    if args.runs < 1 or args.workers < 1:
-        raise UsageError("--runs and --workers must be positive")
-    if args.runs > 100_000 or args.workers > 64:
-        raise UsageError("--runs must be at most 100000 and --workers at most 64")
+    given = read_run_arguments(args)
     if min(args.targets) < 1 or min(args.robots) < 1:
         raise UsageError("--targets and --robots must be positive")
     if max(args.targets) > 1000 or max(args.robots) > 1000:
@@ -138,14 +133,14 @@ def settings(args: argparse.Namespace) -> LevySettings:
     if save is not None and setup.tag():  # runs of other settings are kept apart
         save = save.with_name(f"{save.name}-{setup.tag()}")
     return LevySettings(
-        seed=secrets.randbits(32) if args.seed is None else args.seed,
+        seed=given.seed,
         runs=args.runs,
         sweeps=tuple(args.sweep),
         methods=tuple(args.methods),
         targets=tuple(args.targets),
         robots=tuple(args.robots),
         alphas=tuple(args.alphas),
-        workers=args.workers,
+        workers=given.workers,
         setup=setup,
         save=save,
         out=None if args.no_plots else args.out,

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import secrets
 from pathlib import Path
 from typing import Any
 
@@ -12,7 +11,7 @@ from mover.cli import UsageError
 from robots.explore import EXCHANGES, METHODS
 from sim_hw.grid import MazeFileError, load_maze
 
-from .._common import comma_list, runner_parser
+from .._common import add_run_arguments, comma_list, read_run_arguments, runner_parser
 from .._figures import add_figure_arguments
 from ._paper import AGENT_COUNTS, PROBABILITIES, SIZE
 from ._report import composite, composite_text, tables
@@ -26,14 +25,13 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 
     help = "CU-LVP and baselines on seeded mazes (Linardakis et al., IV-V)"
     parser = runner_parser(sub, "maze", help, doc)
-    parser.add_argument("--runs", type=int, default=100, help="mazes per cell (default 100)")
+    add_run_arguments(parser, runs=100, seed=None)
     parser.add_argument(
         "--hedac-runs",
         type=int,
         default=None,
         help="fewer runs for HEDAC, the slow method (default: --runs)",
     )
-    parser.add_argument("--seed", type=int, default=None, help="master seed (default: random)")
     parser.add_argument(
         "--methods",
         type=comma_list(str, METHODS),
@@ -80,8 +78,9 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 def settings(args: argparse.Namespace) -> MazeSettings:
     """The settings the command line asks for, checked; the maze file read. Raises
     :class:`~mover.cli.UsageError` naming what is wrong."""
-    if args.runs < 1 or min(args.agents) < 1 or args.exchanges < 1:
-        raise UsageError("--runs, --agents and --exchanges must be positive")
+    given = read_run_arguments(args)
+    if min(args.agents) < 1 or args.exchanges < 1:
+        raise UsageError("--agents and --exchanges must be positive")
     if not 4 <= args.size <= 1000:
         raise UsageError(f"--size must be from 4 to 1000, got {args.size}")
     if not all(0.0 <= p <= 1.0 for p in args.p):  # NaN too
@@ -97,7 +96,7 @@ def settings(args: argparse.Namespace) -> MazeSettings:
                 f"{args.maze} has {len(maze.starts)} starts, {max(args.agents)} agents asked"
             )
     return MazeSettings(
-        seed=secrets.randbits(32) if args.seed is None else args.seed,
+        seed=given.seed,
         runs=args.runs,
         hedac_runs=args.runs if args.hedac_runs is None else args.hedac_runs,
         methods=tuple(args.methods),

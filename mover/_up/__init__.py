@@ -20,8 +20,9 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from .._procs import ProcessExited
 from ._plan import PEER_MESH_MAX, members, needs_router
-from ._supervisor import ProcessExited, Stopped, Supervisor, UpError
+from ._supervisor import Stopped, Supervisor, UpError
 from ._teamfile import TeamFileError, TeamPlan, load_team
 
 __all__ = [

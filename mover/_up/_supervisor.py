@@ -20,7 +20,6 @@ wait at once with its last words.
 from __future__ import annotations
 
 import asyncio
-import collections
 import contextlib
 import json
 import os
@@ -35,7 +34,7 @@ from typing import IO, Any, TypeVar
 from .._config import NodeConfig, Team, free_port
 from .._exceptions import MoverError
 from .._node import Node
-from .._orphans import guarded
+from .._procs import Child, ProcessExited, start, stop
 from .._programs import PROGRESS_TOPIC, launch
 from ._plan import ProcessPlan, Seeds, processes, resolved, seeds, uses_router
 from ._teamfile import MAX_WAIT, SUPERVISOR, TeamPlan
@@ -48,25 +47,11 @@ KILL_GRACE = 2.0
 """Seconds after SIGTERM before SIGKILL."""
 ROUTER_READY = 10.0
 """Seconds a router has to say it listens."""
-LAST_LINES = 20
-"""Lines of each process's output kept for the error when it exits."""
-MAX_LINE = 2**20
-"""The longest output line read from a process (a longer one is cut)."""
 
 
 class UpError(Exception):
-    """``mover up`` cannot go on: one line saying why."""
-
-
-class ProcessExited(UpError):
-    """A process ended that the team cannot do without (or one ended before it was ready)."""
-
-    def __init__(self, name: str, code: int, last: list[str], log: Path | None = None) -> None:
-        self.name, self.code, self.last, self.log = name, code, last, log
-        how = f"was killed by signal {-code}" if code < 0 else f"exited with code {code}"
-        said = last[-1] if last else "nothing"
-        where = f" (its log: {log})" if log is not None else ""
-        super().__init__(f"the {name} process {how}; its last word: {said}{where}")
+    """``mover up`` cannot go on: one line saying why. (A process that ended the team cannot
+    do without, or one that ended before it was ready, is a :class:`ProcessExited`.)"""
 
 
 class Stopped(Exception):
@@ -76,13 +61,13 @@ class Stopped(Exception):
 @dataclass
 class _Child:
     plan: ProcessPlan
-    proc: asyncio.subprocess.Process
-    log: IO[bytes]
-    last: collections.deque[str] = field(
-        default_factory=lambda: collections.deque(maxlen=LAST_LINES)
-    )
+    process: Child
     said_ready: asyncio.Event = field(default_factory=asyncio.Event)
     ready: bool = False  # seen serving: a member of the team, or its ready line said
+
+    @property
+    def proc(self) -> asyncio.subprocess.Process:
+        return self.process.proc
 
 
 class Supervisor:
@@ -114,7 +99,7 @@ class Supervisor:
         self.node: Node = None  # type: ignore[assignment]  # set on entry
         self.children: list[_Child] = []
         self.t0 = time.monotonic()
-        self._fault: asyncio.Future[UpError] | None = None
+        self._fault: asyncio.Future[ProcessExited] | None = None
         self._stop = asyncio.Event()
         self._signals = 0
         self._tasks: set[asyncio.Task[Any]] = set()
@@ -194,18 +179,13 @@ class Supervisor:
 
     async def _spawn(self, p: ProcessPlan, env: dict[str, str]) -> _Child:
         log = _open_log(self.out / f"{p.name}.log")
-        try:
-            proc = await asyncio.create_subprocess_exec(
-                *guarded(p.argv), env=env, stdin=asyncio.subprocess.DEVNULL,
-                stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.STDOUT,
-                start_new_session=True, limit=MAX_LINE,
-            )  # fmt: skip
+        try:  # its own session: a terminal's Ctrl-C is ours to pass on, in order
+            process = await start(p.name, p.argv, env=env, log=log, pump=True, own_session=True)
         except OSError as exc:
-            log.close()
             raise UpError(f"cannot start {p.name}: {exc.strerror or exc}") from None
-        child = _Child(p, proc, log)
+        child = _Child(p, process)
         self.children.append(child)
-        self.say(f"started {p.name} (pid {proc.pid})")
+        self.say(f"started {p.name} (pid {process.proc.pid})")
         self._keep(self._watch(child))
         return child
 
@@ -216,36 +196,23 @@ class Supervisor:
 
     async def _watch(self, child: _Child) -> None:
         """Pump the child's lines until its output ends, then tell how it ended."""
-        assert child.proc.stdout is not None
         prefix = f"[{child.plan.name}]".ljust(self._width)
-        try:
-            while True:
-                try:
-                    raw = await child.proc.stdout.readline()
-                except ValueError:  # a line longer than MAX_LINE (asyncio drops it)
-                    raw = f"(a line over {MAX_LINE} bytes, dropped)\n".encode()
-                if not raw:
-                    break
-                child.log.write(raw)
-                child.log.flush()
-                text = raw.decode(errors="replace").rstrip()
-                child.last.append(text)
-                if child.plan.ready_line and text.startswith(child.plan.ready_line):
-                    child.said_ready.set()
-                if self.echo:
-                    _line(f"{prefix} {text}")
-            code = await child.proc.wait()
-        finally:
-            child.log.close()
+
+        def heard(text: str) -> None:
+            if child.plan.ready_line and text.startswith(child.plan.ready_line):
+                child.said_ready.set()
+            if self.echo:
+                _line(f"{prefix} {text}")
+
+        code = await child.process.pump(heard)
         if self._stop.is_set():
             return
         what = f"exited with code {code}" if code >= 0 else f"was killed by signal {-code}"
         self.say(f"{child.plan.name} {what}")
         if child.plan.required or not child.ready:
-            log = self.out / f"{child.plan.name}.log"
-            self._fail(ProcessExited(child.plan.name, code, list(child.last), log))
+            self._fail(child.process.exited(code))
 
-    def _fail(self, fault: UpError) -> None:
+    def _fail(self, fault: ProcessExited) -> None:
         if self._fault is not None and not self._fault.done():
             self._fault.set_result(fault)
 
@@ -257,7 +224,7 @@ class Supervisor:
             self._stop.set()
         else:  # asked twice: no more patience
             for c in self.children:
-                _signal(c, signal.SIGKILL)
+                c.process.signal(signal.SIGKILL)
 
     def say(self, text: str, *, force: bool = False) -> None:
         """A line of ``mover up``'s own, prefixed ``[up]`` (only with ``echo``, or ``force``)."""
@@ -388,12 +355,14 @@ class Supervisor:
         team = self.node.team.members() if self.node is not None else frozenset()
         for c in self.children:
             c.ready = c.said_ready.is_set() or c.plan.name in team
+            c.process.interruptible = c.ready
+        ladder = _stop_ladder()
         for stage in (2, 1):
-            await _stop_all([c for c in self.children if c.plan.stage == stage])
+            await stop([c.process for c in self.children if c.plan.stage == stage], ladder)
         if self.node is not None:
             with contextlib.suppress(Exception):
                 await self.node.close()
-        await _stop_all([c for c in self.children if c.plan.stage == 0])
+        await stop([c.process for c in self.children if c.plan.stage == 0], ladder)
         if self._tasks:
             await asyncio.wait(self._tasks, timeout=KILL_GRACE)
         if self.signals:
@@ -404,20 +373,9 @@ class Supervisor:
             self.say(f"stopped {len(self.children)} processes in {time.monotonic() - t0:.1f} s")
 
 
-async def _stop_all(children: list[_Child]) -> None:
-    alive = [c for c in children if c.proc.returncode is None]
-    for sig, grace in (
-        (signal.SIGINT, STOP_GRACE),
-        (signal.SIGTERM, KILL_GRACE),
-        (signal.SIGKILL, KILL_GRACE),
-    ):
-        for c in alive:
-            _signal(c, sig if c.ready or sig != signal.SIGINT else signal.SIGTERM)
-        if alive:
-            await asyncio.wait([asyncio.ensure_future(c.proc.wait()) for c in alive], timeout=grace)
-        alive = [c for c in alive if c.proc.returncode is None]
-        if not alive:
-            return
+def _stop_ladder() -> list[tuple[int, float]]:
+    """SIGINT, SIGTERM after ``STOP_GRACE`` s, SIGKILL after ``KILL_GRACE`` more (read now)."""
+    return [(signal.SIGINT, STOP_GRACE), (signal.SIGTERM, KILL_GRACE), (signal.SIGKILL, KILL_GRACE)]
 
 
 _quiet = False  # standard output went away (a closed pipe): the logs still get every line
@@ -432,14 +390,6 @@ def _line(text: str) -> None:
         print(text, flush=True)
     except (BrokenPipeError, OSError):
         _quiet = True
-
-
-def _signal(child: _Child, sig: int) -> None:
-    """Signal the child's whole process group (its own, from ``start_new_session``)."""
-    if child.proc.returncode is not None:
-        return
-    with contextlib.suppress(ProcessLookupError, PermissionError):
-        os.killpg(child.proc.pid, sig)
 
 
 def _open_log(path: Path) -> IO[bytes]:

@@ -20,14 +20,21 @@ from collections.abc import Coroutine
 from pathlib import Path
 from typing import Any
 
-from mover.cli import UsageError, add_team_arguments, member_name, positive, team_from_args
+from mover.cli import (
+    UsageError,
+    add_team_arguments,
+    bounded,
+    member_name,
+    positive,
+    team_from_args,
+)
 
 
 def add_viewer_arguments(p: argparse.ArgumentParser) -> None:
     """``--port`` and ``--bind``: where the viewer's page is served."""
     p.add_argument(
         "--port",
-        type=_port,
+        type=bounded(int, 1, 65535),
         default=9090,
         help="the viewer page's port (default 9090; one per view)",
     )
@@ -65,16 +72,6 @@ def register(sub: Any) -> None:
     )
     add_team_arguments(p)
     p.set_defaults(func=run_view)
-
-
-def _port(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a port number: {text!r}") from None
-    if not 1 <= value <= 65535:
-        raise argparse.ArgumentTypeError(f"a port is 1-65535, got {value}")
-    return value
 
 
 def _say(verb: str) -> Any:

@@ -109,7 +109,7 @@ def test_agent_seeds_pair_draws_on_each_environment(
 @pytest.mark.parametrize(
     ("argv", "problem"),
     [
-        (["--runs", "0"], "--runs must be positive"),
+        (["--runs", "0"], "--runs must be from 1 to 100000, got 0"),
         (["--min-runs", "50", "--max-runs", "40"], "at most --max-runs"),
         (["--agents", "0,2"], "--agents must be positive"),
         (["--sizes", "3"], "--sizes at least 5"),

@@ -5,7 +5,7 @@ robot processes (``mover robot``) in a run started by a launcher (``mover run``,
 a grid world (``mover gridworld``) in a foraging run; a router (``mover router``) with members
 behind it; ``mover demo``. Each one is interrupted while the run is under way and must exit
 within ``BOUND`` seconds with a clean status — 130 after Ctrl-C (``mover``'s status for an
-interrupt, ``mover/_cli.py``), 0 where the process treats the signal as its ordinary stop (the
+interrupt, ``mover/cli/_main.py``), 0 where the process treats the signal as its ordinary stop (the
 router), 143, 130 or 0 after SIGTERM — writing no traceback to its output or its log, and at most
 ``QUIET`` lines after the signal. A robot that is interrupted is seen leaving by the others,
 and the run fails on the rest with MemberLost.

@@ -11,7 +11,7 @@ import zenoh
 
 from mover import Node, NodeConfig, Team, free_port
 from mover._config import _read_overrides
-from mover._router import generate_config
+from mover.cli._router import generate_config
 
 
 async def test_members_talk_through_a_secured_router_and_outsiders_cannot_connect(

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import pytest
 
+from mover._procs import Child, stop
 from mover._up import _supervisor
 from mover._up._plan import ProcessPlan
 from tests.helpers.procs import ROOT
@@ -261,9 +262,8 @@ async def test_a_process_that_ignores_sigint_and_sigterm_is_killed_after_the_bou
     )
     assert proc.stdout is not None
     assert await asyncio.wait_for(proc.stdout.readline(), 20) == b"READY\n"
-    with (tmp_path / "log").open("ab") as log:
-        child = _supervisor._Child(plan, proc, log, ready=True)
-        t0 = time.monotonic()
-        await _supervisor._stop_all([child])
+    child = Child(plan.name, proc, tmp_path / "log", group=True)  # its own session, as in up
+    t0 = time.monotonic()
+    await stop([child], _supervisor._stop_ladder())
     assert proc.returncode == -signal.SIGKILL
     assert 0.6 <= time.monotonic() - t0 < 5

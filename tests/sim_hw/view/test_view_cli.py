@@ -75,7 +75,7 @@ async def test_view_waits_shows_loses_and_shows_again_a_world(tmp_path: Path) ->
 @pytest.mark.parametrize(
     ("args", "says"),
     [
-        (["--port", "0"], "a port is 1-65535, got 0"),
+        (["--port", "0"], "--port: must be from 1 to 65535, got 0"),
         (["--links", "-1"], "must be a finite number above 0"),
         (["--record", "x.txt"], "--record must name a .rrd file"),
         (["--world", "a b"], "bad member name"),

@@ -26,8 +26,8 @@ import threading
 from pathlib import Path
 from typing import Any
 
-from ._config import NodeConfig, _read_overrides
-from ._keys import check_name
+from .._config import NodeConfig, _read_overrides
+from .._keys import check_name
 
 CLOSE_BOUND = 10.0
 """Seconds a stopping router may take to close its session before it exits anyway."""
@@ -73,7 +73,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from .cli import UsageError
+    from . import UsageError
 
     if args.gen_config:
         if not args.team or not args.members:

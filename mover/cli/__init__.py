@@ -12,6 +12,8 @@ ways). Nothing here opens a session or reads the environment until it is called:
 * :func:`add_log_arguments` and :func:`setup_logging` — ``-v/--verbose`` (``-v`` INFO, ``-vv``
   DEBUG) and ``--log-level LEVEL``; with neither, ``$MOVER_LOG_LEVEL`` (``LOG_LEVEL_ENV``),
   else the process's default;
+* :func:`bounded` — the argparse type of every number with bounds (:func:`positive` and
+  :func:`seed`, from 0 to ``MAX_SEED``, are two of them);
 * :class:`UsageError` — a command-line mistake, which a command prints as one line and exits 2.
 """
 
@@ -20,26 +22,35 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import math
 import os
 import signal
 import typing
 
-from ._config import NodeConfig, Team
-from ._keys import check_name as _check_name
-from ._orphans import guarded
+from .._config import NodeConfig, Team
+from .._keys import check_name as _check_name
+from .._orphans import guarded
+
+if typing.TYPE_CHECKING:
+    from collections.abc import Callable
+
+_N = typing.TypeVar("_N", int, float)
 
 __all__ = [
     "LOG_LEVEL_ENV",
+    "MAX_SEED",
     "Terminated",
     "UsageError",
     "add_log_arguments",
     "add_team_arguments",
+    "bounded",
     "guarded",
     "interrupt_on_sigterm",
     "json_argument",
     "json_object",
     "member_name",
     "positive",
+    "seed",
     "setup_logging",
     "team_from_args",
 ]
@@ -83,15 +94,52 @@ def json_object(text: str, what: str) -> dict[str, typing.Any]:
     return value
 
 
-def positive(text: str) -> float:
-    """An argparse type: a finite number above zero (seconds, speeds), else a one-line error."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not 0 < value < float("inf"):
-        raise argparse.ArgumentTypeError(f"must be a finite number above 0, got {text}")
-    return value
+def bounded(
+    kind: type[_N], low: _N | None = None, high: _N | None = None, *, above: bool = False
+) -> Callable[[str], _N]:
+    """An argparse type: a whole number (``int``) or a finite number (``float``) from ``low``
+    to ``high`` (either may be None: no bound; ``above``: ``low`` itself excluded), else a
+    one-line error such as ``must be from 0 to 1000, got 5000``. The one number type of every
+    command line, so that every bound is checked and told the same way."""
+    words = []
+    if low is not None and high is not None and not above:
+        words.append(f"from {_num(low)} to {_num(high)}")
+    else:
+        if low is not None:
+            words.append(f"{'above' if above else 'at least'} {_num(low)}")
+        if high is not None:
+            words.append(f"at most {_num(high)}")
+    noun = "" if kind is int else "a number " if high is not None else "a finite number "
+    wanted = f"must be {noun}{' and '.join(words)}".rstrip()
+
+    def parse(text: str) -> _N:
+        try:
+            value = kind(text)
+        except ValueError:
+            what = "a whole number" if kind is int else "a number"
+            raise argparse.ArgumentTypeError(f"not {what}: {text!r}") from None
+        fits = kind is int or math.isfinite(value)  # NaN, inf: never a bounded float
+        fits = fits and (low is None or (value > low if above else value >= low))
+        if not (fits and (high is None or value <= high)):
+            raise argparse.ArgumentTypeError(f"{wanted}, got {text}")
+        return value
+
+    parse.__doc__ = f"An argparse type: a number that {wanted}."
+    return parse
+
+
+def _num(value: float) -> str:
+    return f"{value:g}" if isinstance(value, float) else str(value)
+
+
+#: An argparse type: a finite number above zero (seconds, speeds), else a one-line error.
+positive = bounded(float, 0.0, above=True)
+
+#: The largest seed a command line takes (seeds are 0 to ``MAX_SEED``).
+MAX_SEED = 2**63 - 1
+
+#: An argparse type: a seed, from 0 to :data:`MAX_SEED`.
+seed = bounded(int, 0, MAX_SEED)
 
 
 def member_name(text: str) -> str:

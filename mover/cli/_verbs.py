@@ -1,5 +1,5 @@
 """The `mover ps`, `mover call`, `mover echo` and `mover keygen` verbs (`mover run`, `runs`
-and `cancel` are in ``mover._cli_runs``).
+and `cancel` are in ``mover.cli._runs``).
 
 Team and transport come from ``--team`` and the MOVER_* environment (see ``mover._config``);
 ``--connect`` adds endpoints to reach the team. Both are :func:`mover.cli.add_team_arguments`'.
@@ -19,12 +19,13 @@ import sys
 import time
 from typing import TYPE_CHECKING, Any
 
-from ._config import NodeConfig, Team
-from ._exceptions import CallError, NotDelivered, UnknownProcedure, WireError
-from ._keys import check_name
-from .cli import (
+from .._config import NodeConfig, Team
+from .._exceptions import CallError, NotDelivered, UnknownProcedure, WireError
+from .._keys import check_name
+from . import (
     UsageError,
     add_team_arguments,
+    bounded,
     json_argument,
     json_object,
     positive,
@@ -32,7 +33,7 @@ from .cli import (
 )
 
 if TYPE_CHECKING:
-    from ._node import Node
+    from .._node import Node
 
     Sub = argparse._SubParsersAction[argparse.ArgumentParser]
 
@@ -49,18 +50,11 @@ def _team_options(p: argparse.ArgumentParser) -> None:
     add_team_arguments(p)
     p.add_argument(
         "--wait",
-        type=_wait,
+        type=bounded(float, 0.0, MAX_WAIT, above=True),
         default=2.0,
         metavar="S",
         help="seconds to wait for the team to be discovered (default 2, at most 3600)",
     )
-
-
-def _wait(text: str) -> float:
-    value = positive(text)
-    if value > MAX_WAIT:
-        raise argparse.ArgumentTypeError(f"must be at most {MAX_WAIT:g} s, got {text}")
-    return value
 
 
 # -- ps -------------------------------------------------------------------------------------------
@@ -122,7 +116,7 @@ async def observe(
 ) -> tuple[list[Any], dict[str, list[dict[str, Any]] | str]]:
     """The team's members as an observer (not a member) sees them after ``wait`` seconds, and
     each one's ``mover.status`` (tools are not asked)."""
-    from ._node import Node
+    from .._node import Node
 
     async with Node(
         f"{tag}-{secrets.token_hex(3)}", team, kind="tool", config=config, observer=True
@@ -215,7 +209,7 @@ async def _call(
     positional: list[Any],
     kwargs: dict[str, Any],
 ) -> int:
-    from ._node import Node
+    from .._node import Node
 
     async with Node(
         f"cli-{secrets.token_hex(3)}", team, kind="tool", config=config, observer=True
@@ -307,7 +301,10 @@ def register_echo(sub: Sub) -> None:
         " reach it, with distance and bearing",
     )
     p.add_argument(
-        "--count", type=_count, default=0, help="stop after N messages (default: until Ctrl-C)"
+        "--count",
+        type=bounded(int, 0, 1_000_000),
+        default=0,
+        help="stop after N messages (default: until Ctrl-C)",
     )
     p.add_argument("--json", action="store_true", help="one JSON object per message")
     _team_options(p)
@@ -324,16 +321,6 @@ def _pose(text: str) -> tuple[float, float, float]:
     return (parts[0], parts[1], parts[2] if len(parts) == 3 else 0.0)
 
 
-def _count(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
-    if not 0 <= value <= 1_000_000:
-        raise argparse.ArgumentTypeError(f"must be from 0 to 1000000, got {text}")
-    return value
-
-
 def run_echo(args: argparse.Namespace) -> int:
     if not args.topic or len(args.topic) > 200 or any(c in args.topic for c in "*$#?"):
         raise UsageError(f"not a topic: {args.topic!r} (no wildcards, at most 200 characters)")
@@ -342,7 +329,7 @@ def run_echo(args: argparse.Namespace) -> int:
 
 
 async def _echo(team: Team, config: NodeConfig, args: argparse.Namespace) -> int:
-    from ._node import Node
+    from .._node import Node
 
     where = args.at
     locator = _Fixed(where) if where is not None else None

@@ -20,19 +20,20 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ._cli_verbs import NO_ANSWER, _plain, _statuses, _team_options, observe
-from ._config import NodeConfig, Team
-from ._exceptions import CallError
-from ._keys import check_name
-from .cli import (
+from .._config import NodeConfig, Team
+from .._exceptions import CallError
+from .._keys import check_name
+from . import (
     UsageError,
     json_object,
     member_name,
+    seed,
     team_from_args,
 )
+from ._verbs import NO_ANSWER, _plain, _statuses, _team_options, observe
 
 if TYPE_CHECKING:
-    from ._node import Node
+    from .._node import Node
 
     Sub = argparse._SubParsersAction[argparse.ArgumentParser]
 
@@ -44,17 +45,6 @@ _STATE_LIMIT = 1 << 20  # bytes of teams.json read at most
 
 
 # -- run ------------------------------------------------------------------------------------------
-
-
-def _seed(text: str) -> int:
-    """An argparse type: a seed, 0 <= seed < 2**63."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
-    if not 0 <= value < 2**63:
-        raise argparse.ArgumentTypeError(f"must be at least 0 and below 2**63, got {text}")
-    return value
 
 
 def register_run(sub: Sub) -> None:
@@ -78,7 +68,7 @@ def register_run(sub: Sub) -> None:
     p.add_argument("--detach", action="store_true", help="exit once the run has started")
     p.add_argument("--run-id", type=member_name, help="name of the run (default: PROGRAM-<random>)")
     p.add_argument(
-        "--seed", type=_seed, help="seed of the run's random choices (default: from the run id)"
+        "--seed", type=seed, help="seed of the run's random choices (default: from the run id)"
     )
     p.add_argument(
         "--share",
@@ -122,7 +112,7 @@ def run_run(args: argparse.Namespace) -> int:
 
 def _progress(node: Node, run: str) -> asyncio.Task[None]:
     """Print the progress reports of run ``run`` as they come (a task; cancel it to stop)."""
-    from ._programs import PROGRESS_TOPIC
+    from .._programs import PROGRESS_TOPIC
 
     progress = node.subscribe(f"{PROGRESS_TOPIC}/{run}")
     started = time.monotonic()
@@ -149,8 +139,8 @@ async def _run(
     robots: list[str] | None,
     kwargs: dict[str, Any],
 ) -> int:
-    from ._node import Node
-    from ._programs import launch, outcomes
+    from .._node import Node
+    from .._programs import launch, outcomes
 
     run = args.run_id or f"{args.program}-{secrets.token_hex(3)}"
     async with Node(
@@ -236,8 +226,8 @@ async def _find_run(
 
 
 async def _attach(team: Team, config: NodeConfig, args: argparse.Namespace) -> int:
-    from ._node import Node
-    from ._programs import outcomes
+    from .._node import Node
+    from .._programs import outcomes
 
     run = args.attach
     async with Node(
@@ -335,8 +325,8 @@ def run_cancel(args: argparse.Namespace) -> int:
 
 
 async def _cancel(team: Team, config: NodeConfig, args: argparse.Namespace) -> int:
-    from ._node import Node
-    from ._programs import CANCEL_WAIT
+    from .._node import Node
+    from .._programs import CANCEL_WAIT
 
     async with Node(
         f"cancel-{secrets.token_hex(3)}", team, kind="tool", config=config, observer=True
