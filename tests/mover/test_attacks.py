@@ -21,7 +21,7 @@ from mover import Node
 from tests.helpers.procs import Cluster, cluster
 from tests.mover.test_processes import _raw_get
 
-pytestmark = pytest.mark.asyncio(loop_scope="module")
+pytestmark = [pytest.mark.processes, pytest.mark.asyncio(loop_scope="module")]
 
 SECRET = "the-rescue-code-4711"
 BOUND = 1.0  # seconds: no call may take longer while the outsider is at work

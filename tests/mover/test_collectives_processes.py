@@ -13,6 +13,8 @@ import pytest
 from mover import Node, NodeConfig, Refused, Team, UnknownRobot, free_port, launch
 from tests.helpers.procs import cluster
 
+pytestmark = pytest.mark.processes
+
 
 async def start_team(c, node: Node, names: list[str], config: NodeConfig | None = None) -> None:
     await asyncio.gather(

@@ -23,6 +23,8 @@ from mover._tasks import DECIDED_TOPIC
 from mover._wire import pack
 from tests.helpers.procs import ROOT, cluster
 
+pytestmark = pytest.mark.processes
+
 FRAMES = 50_000
 RSS_BOUND_MB = 50
 SEED = 2026

@@ -38,7 +38,7 @@ from mover import (
 from mover._wire import Opener, Sealer
 from tests.helpers.procs import Cluster, cluster
 
-pytestmark = pytest.mark.asyncio(loop_scope="module")
+pytestmark = [pytest.mark.processes, pytest.mark.asyncio(loop_scope="module")]
 
 POSITIONS = {"r1": (0.0, 0.0, 0.0), "r2": (3.0, 4.0, math.pi / 2), "r3": (6.0, 8.0, math.pi)}
 

@@ -16,6 +16,8 @@ from sim_hw.grid import place_resources, random_obstacles
 from tests.helpers.procs import cluster
 from tests.programs._grid import WORLD, start_robots, start_world, write_grid
 
+pytestmark = pytest.mark.processes
+
 BASE = (6, 6)
 
 

@@ -11,10 +11,14 @@ import signal
 import time
 from pathlib import Path
 
+import pytest
+
 from mover import Node, launch
 from sim_hw.grid import place_resources, random_obstacles
 from tests.helpers.procs import cluster
 from tests.programs._grid import WORLD, start_robots, start_world, write_grid
+
+pytestmark = pytest.mark.processes
 
 BASE = (7, 7)
 NAMES = ["k0", "k1", "k2", "k3"]

@@ -7,12 +7,15 @@ import time
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from experiments.maze import run_trial
 from mover import Node, launch
 from sim_hw.grid import generate_maze, save_maze
 from tests.helpers.procs import cluster
 from tests.programs._grid import WORLD, start_robots, start_world
+
+pytestmark = pytest.mark.processes
 
 SEED = 2
 

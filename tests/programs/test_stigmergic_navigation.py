@@ -25,6 +25,8 @@ import pytest
 
 from mover import launch
 
+pytestmark = pytest.mark.processes
+
 ROOT = Path(__file__).resolve().parents[2]
 DURATION = 80.0
 NEAR_TARGET = [[2.3, 0.6, 180], [2.3, 1.0, 180], [2.3, 1.4, 180], [2.7, 0.8, 150], [2.7, 1.3, 210]]

@@ -22,7 +22,7 @@ from mover._cli import main
 from sim_hw import World, WorldServer, in_process, load_world, read_recording
 from sim_hw.continuous._walker import random_walk
 
-pytestmark = pytest.mark.timeout(90)
+pytestmark = [pytest.mark.processes, pytest.mark.timeout(90)]
 
 ROOT = Path(__file__).resolve().parents[3]
 WORLD = """
