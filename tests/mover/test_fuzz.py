@@ -52,14 +52,15 @@ WRONG = [
 ]
 
 
-def _frames(node: Node, team: str, rng: random.Random) -> list[tuple[str, str, bytes]]:
+def _frames(node: Node, team: str, rng: random.Random) -> list[tuple[str, str, bytes | bytearray]]:
     """(how, key, frame) triples: how is put or get."""
     sealer = node._sealer
     bc = f"mover/{team}/bc"
     keys = [f"{bc}/news", f"{bc}/flood", f"{bc}/{DECIDED_TOPIC}", f"mover/{team}/ctl/r1"]
     rpc = f"mover/{team}/rpc/r1"
     epoch = node._sessions.verified("r1") or b""
-    out: list[tuple[str, str, bytes]] = []
+    out: list[tuple[str, str, bytes | bytearray]] = []
+    frame: bytes | bytearray
     for i in range(FRAMES):
         kind = i % 8
         key = keys[i % len(keys)]

@@ -294,7 +294,7 @@ async def _until(predicate: object, timeout: float = 5.0) -> None:
             await asyncio.sleep(0.01)
 
 
-async def _raw_get(node: Node, key: str, frame: bytes) -> bytes:
+async def _raw_get(node: Node, key: str, frame: bytes | bytearray) -> bytes:
     """A raw zenoh get (no mover client), returning the first reply's bytes."""
 
     def get() -> bytes:

@@ -10,6 +10,7 @@ import asyncio
 import signal
 import time
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -50,7 +51,7 @@ async def _run_and_stop_one(tmp_path: Path, sig: signal.Signals, timeout: str) -
         after = await node.call(WORLD, "state", timeout=5)
         assert after["round"] > before, "the world is stuck"
         outcomes = await asyncio.wait_for(run, 90)
-        survivors = {n: outcomes[n].get("result") for n in NAMES if n != "k1"}
+        survivors: dict[str, Any] = {n: outcomes[n].get("result") for n in NAMES if n != "k1"}
         assert all(r and r["finished"] for r in survivors.values()), outcomes
         assert "error" in outcomes["k1"]
         end = await node.call(WORLD, "state", timeout=5)
@@ -96,7 +97,7 @@ async def test_maze_survivors_finish_without_a_killed_member(tmp_path: Path) -> 
                 await asyncio.sleep(0.02)
         procs[1].kill()
         outcomes = await asyncio.wait_for(run, 90)
-        survivors = {n: outcomes[n].get("result") for n in names if n != "m1"}
+        survivors: dict[str, Any] = {n: outcomes[n].get("result") for n in names if n != "m1"}
         assert all(r and r["finished"] for r in survivors.values()), outcomes
         state = await node.call(WORLD, "state", timeout=5)
         assert state["dropped"] == ["m1"] and state["explored"] == state["observable"]

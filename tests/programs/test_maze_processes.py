@@ -5,6 +5,7 @@ from __future__ import annotations
 import asyncio
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -50,7 +51,7 @@ async def test_distributed_maze_run_matches_the_in_process_run(tmp_path: Path) -
             100,
         )
         took = time.monotonic() - t0
-        results = {n: o.get("result") for n, o in outcomes.items()}
+        results: dict[str, Any] = {n: o.get("result") for n, o in outcomes.items()}
         assert all(r and r["finished"] for r in results.values()), outcomes
         state = await node.call(WORLD, "state", timeout=5)
         assert state["explored"] == state["observable"] == reference["observable"]
