@@ -1,9 +1,17 @@
 # Each target sets itself up: a fresh machine needs only python3 (3.11+) and make.
+#   make check     ruff, the format check, mypy and the quick tests (minutes): before a commit
+#   make test      the same checks and every test (what CI runs, through .ci/run)
+#   make coverage  the tests under coverage, processes they start included (TESTS= narrows)
 VENV ?= .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
+CODE := mover robots sim_hw programs experiments tests bench examples
+# The quick set: no test marked slow, none that starts a process (tests/conftest.py keeps the
+# `processes` mark true).
+QUICK := -m "not slow and not processes"
+TESTS ?=
 
-.PHONY: demo test lint bench clean
+.PHONY: demo lint check test coverage bench clean
 
 $(STAMP): pyproject.toml
 	python3 -m venv $(VENV)
@@ -14,14 +22,25 @@ $(STAMP): pyproject.toml
 demo: $(STAMP)
 	$(VENV)/bin/mover demo
 
-test: $(STAMP)
-	$(PY) -m ruff check mover robots sim_hw programs experiments tests bench examples
-	$(PY) -m ruff format --check mover robots sim_hw programs experiments tests bench examples README.md
+lint: $(STAMP)
+	$(PY) -m ruff check $(CODE)
+	$(PY) -m ruff format --check $(CODE) README.md
 	$(PY) -m mypy
+
+check: lint
+	$(PY) -m pytest -q $(QUICK)
+
+test: lint
 	$(PY) -m pytest -q
+
+coverage: $(STAMP)
+	$(PY) -m coverage erase
+	$(PY) -m coverage run -m pytest -q $(TESTS)
+	$(PY) -m coverage combine -q
+	$(PY) -m coverage report
 
 bench: $(STAMP)
 	$(PY) bench/rpc.py
 
 clean:
-	rm -rf $(VENV) build *.egg-info
+	rm -rf $(VENV) build *.egg-info .coverage .coverage.* htmlcov

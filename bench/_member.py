@@ -7,6 +7,7 @@ import asyncio
 import random
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -97,5 +98,9 @@ async def bench_and(
 if __name__ == "__main__":
     p = argparse.ArgumentParser()
     p.add_argument("--name", required=True)
-    programs = {"bench_or": bench_or, "bench_raw_or": bench_raw_or, "bench_and": bench_and}
+    programs: dict[str, Callable[..., Any]] = {
+        "bench_or": bench_or,
+        "bench_raw_or": bench_raw_or,
+        "bench_and": bench_and,
+    }
     asyncio.run(serve_programs(p.parse_args().name, programs))

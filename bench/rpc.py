@@ -80,7 +80,12 @@ async def _loop_get(session: Any, payload: bytes) -> bytes:
     def on_reply(reply: Any) -> None:
         if reply.ok is not None:
             data = reply.ok.payload.to_bytes()
-            loop.call_soon_threadsafe(lambda: future.done() or future.set_result(data))
+
+            def settle() -> None:
+                if not future.done():
+                    future.set_result(data)
+
+            loop.call_soon_threadsafe(settle)
 
     session.get(
         LOOP_KEY,
@@ -178,7 +183,7 @@ async def stop(procs: list[asyncio.subprocess.Process]) -> None:
         await p.wait()
 
 
-def pct(samples: list[float], q: float) -> float:
+def pct(samples: list[float], q: int) -> float:
     return statistics.quantiles(samples, n=100, method="inclusive")[q - 1] * 1000.0
 
 

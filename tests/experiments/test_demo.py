@@ -16,6 +16,8 @@ import pytest
 from sim_hw.continuous import read_recording
 from tests.helpers.procs import ROOT
 
+pytestmark = pytest.mark.processes
+
 
 async def run_demo(tmp_path: Path, *args: str) -> tuple[int, str]:
     proc = await asyncio.create_subprocess_exec(

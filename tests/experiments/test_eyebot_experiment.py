@@ -12,6 +12,8 @@ import pytest
 from experiments.eyebot import register, run, settings
 from mover.cli import UsageError
 
+pytestmark = pytest.mark.processes
+
 
 def _parse(*argv: str) -> argparse.Namespace:
     parser = argparse.ArgumentParser()

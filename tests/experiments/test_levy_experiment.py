@@ -26,6 +26,8 @@ from experiments.levy import (
 from mover.cli import UsageError
 from sim_hw.continuous import load_world
 
+pytestmark = pytest.mark.processes
+
 SMALL = replace(Setup(), size=8.0, obstacles=3, max_time=300.0)
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -22,7 +23,9 @@ def _parse(*argv: str) -> argparse.Namespace:
 SMALL = ("--runs", "2", "--seed", "5", "--agents", "1,3", "--size", "12", "--methods", "cu-lvp,nf")
 
 
-def test_runner_prints_tables_ranking_and_json(tmp_path, capsys) -> None:
+def test_runner_prints_tables_ranking_and_json(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     args = _parse(
         *SMALL,
         "--out",
@@ -52,7 +55,7 @@ def test_runner_prints_tables_ranking_and_json(tmp_path, capsys) -> None:
     ]
 
 
-def test_runner_on_a_maze_file(tmp_path, capsys) -> None:
+def test_runner_on_a_maze_file(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     path = tmp_path / "m.json"
     save_maze(path, generate_maze(12, 0.5, np.random.default_rng(2), n_starts=3))
     args = _parse(
@@ -86,7 +89,7 @@ def test_exchanges_must_be_positive() -> None:
 
 
 def test_python_m_experiments_maze_prints_a_usage_error_in_one_line(
-    tmp_path, capsys: pytest.CaptureFixture[str]
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     from experiments.cli import main
 

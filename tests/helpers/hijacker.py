@@ -53,16 +53,18 @@ def main() -> None:
     end = time.monotonic() + args.seconds
     first = True
     while time.monotonic() < end:
-        declared = []
+        queryables: list[zenoh.Queryable[None]] = []
+        subscribers: list[zenoh.Subscriber[None]] = []
         for s in sessions:
-            declared.append(s.declare_queryable(key, on_query, complete=True))
-            declared.append(s.declare_subscriber(f"mover/{args.team}/bc/**", on_sample))
+            queryables.append(s.declare_queryable(key, on_query, complete=True))
+            subscribers.append(s.declare_subscriber(f"mover/{args.team}/bc/**", on_sample))
         if first:
             print("READY", flush=True)
             first = False
         time.sleep(0.5)
-        for d in declared:
-            d.undeclare()
+        for q, sub in zip(queryables, subscribers, strict=True):
+            q.undeclare()
+            sub.undeclare()
     held.clear()
     for s in sessions:
         s.close()

@@ -5,6 +5,7 @@ The machinery is the public ``mover.testing``; this adds the test robot of tests
 
 from __future__ import annotations
 
+import asyncio
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from pathlib import Path
@@ -18,7 +19,9 @@ ROOT = Path(__file__).resolve().parents[2]
 class Cluster(_Cluster):
     """A cluster that can also start the test robot (tests/helpers/robot_proc.py)."""
 
-    async def robot(self, name: str, *extra: str, team: Team | None = None):  # type: ignore[no-untyped-def]
+    async def robot(
+        self, name: str, *extra: str, team: Team | None = None
+    ) -> asyncio.subprocess.Process:
         """Start a test robot."""
         return await self.start("tests.helpers.robot_proc", "--name", name, *extra, team=team)
 

@@ -15,7 +15,7 @@ import time
 def main() -> None:
     offset = float(sys.argv[1])
     real = time.time
-    time.time = lambda: real() + offset  # type: ignore[assignment]
+    time.time = lambda: real() + offset
     module = sys.argv[2]
     sys.argv = [module, *sys.argv[3:]]
     runpy.run_module(module, run_name="__main__", alter_sys=True)

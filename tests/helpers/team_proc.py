@@ -9,7 +9,9 @@ import argparse
 import asyncio
 import logging
 import time
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 from mover import MemberLost, RunTeam
 from mover.testing import serve_programs
@@ -89,7 +91,7 @@ async def divide(robot: None, team: RunTeam, by: int) -> float:
     return 1 / by
 
 
-PROGRAMS = {
+PROGRAMS: dict[str, Callable[..., Any]] = {
     "divide": divide,
     "ties": ties,
     "cleanup": cleanup,

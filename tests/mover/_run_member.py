@@ -8,6 +8,7 @@ from __future__ import annotations
 import asyncio
 import logging
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -41,7 +42,7 @@ async def draw(robot: None, team: RunTeam, n: int) -> dict[str, Any]:
     return {"seed": team.seed, "draws": [rng.random() for _ in range(n)]}
 
 
-PROGRAMS = {"hold": hold, "pause": pause, "draw": draw}
+PROGRAMS: dict[str, Callable[..., Any]] = {"hold": hold, "pause": pause, "draw": draw}
 
 
 if __name__ == "__main__":

@@ -16,12 +16,13 @@ from typing import Any
 
 import pytest
 import pytest_asyncio
+import zenoh
 
 from mover import Node
 from tests.helpers.procs import Cluster, cluster
 from tests.mover.test_processes import _raw_get
 
-pytestmark = pytest.mark.asyncio(loop_scope="module")
+pytestmark = [pytest.mark.processes, pytest.mark.asyncio(loop_scope="module")]
 
 SECRET = "the-rescue-code-4711"
 BOUND = 1.0  # seconds: no call may take longer while the outsider is at work
@@ -82,7 +83,12 @@ async def _capture(node: Node, key: str, send: Any) -> bytes:
 
     def on_sample(sample: Any) -> None:
         frame = bytes(sample.payload.to_bytes())
-        loop.call_soon_threadsafe(lambda: got.done() or got.set_result(frame))
+
+        def settle() -> None:
+            if not got.done():
+                got.set_result(frame)
+
+        loop.call_soon_threadsafe(settle)
 
     sub = node.zenoh_session.declare_subscriber(key, on_sample)
     try:
@@ -125,9 +131,13 @@ async def test_a_call_replayed_to_a_restarted_member_is_refused(
     await node.team.wait_for({"r6"}, timeout=10)
     key = f"mover/{c.team.name}/rpc/r6"
     overheard: list[bytes] = []
-    queryable = node.zenoh_session.declare_queryable(
-        key, lambda q: overheard.append(bytes(q.payload.to_bytes())) or q.drop()
-    )
+
+    def overhear(q: zenoh.Query) -> None:
+        if q.payload is not None:  # a call always carries one
+            overheard.append(bytes(q.payload.to_bytes()))
+        q.drop()
+
+    queryable = node.zenoh_session.declare_queryable(key, overhear)
     await asyncio.sleep(0.3)
     assert await node.call("r6", "bump", timeout=5) == 1
     queryable.undeclare()

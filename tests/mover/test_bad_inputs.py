@@ -22,6 +22,8 @@ import pytest_asyncio
 
 from mover.testing import Cluster, cluster
 
+pytestmark = pytest.mark.processes
+
 ROOT = Path(__file__).resolve().parents[2]
 WORLD = "worlds/search_and_rescue.toml"
 BOUND = 15.0  # seconds any bad input may take to be refused

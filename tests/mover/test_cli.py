@@ -23,6 +23,8 @@ from mover.cli import (
 )
 from tests.helpers.procs import ROOT, cluster
 
+pytestmark = pytest.mark.processes
+
 
 async def mover(
     *args: str, env: dict[str, str], module: str = "mover._cli"

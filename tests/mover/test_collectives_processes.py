@@ -11,10 +11,14 @@ from pathlib import Path
 import pytest
 
 from mover import Node, NodeConfig, Refused, Team, UnknownRobot, free_port, launch
-from tests.helpers.procs import cluster
+from tests.helpers.procs import Cluster, cluster
+
+pytestmark = pytest.mark.processes
 
 
-async def start_team(c, node: Node, names: list[str], config: NodeConfig | None = None) -> None:
+async def start_team(
+    c: Cluster, node: Node, names: list[str], config: NodeConfig | None = None
+) -> None:
     await asyncio.gather(
         *(c.start("tests.helpers.team_proc", "--name", n, config=config) for n in names)
     )

@@ -37,7 +37,7 @@ BOUND = 10.0  # seconds from the signal to the exit
 QUIET = 3  # lines a process may write after the signal (a goodbye, a log line or two)
 INTERRUPTED = {signal.SIGINT: (130, 0), signal.SIGTERM: (143, 130, 0)}
 
-pytestmark = pytest.mark.timeout(180)
+pytestmark = [pytest.mark.processes, pytest.mark.timeout(180)]
 
 
 @dataclass

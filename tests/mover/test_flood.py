@@ -14,6 +14,8 @@ import pytest
 from mover import Node
 from tests.helpers.procs import cluster
 
+pytestmark = pytest.mark.processes
+
 BOUND_MB = 160  # the hand-off's 64 MiB, the subscription's 1000 messages, the rest of Python
 
 

@@ -23,6 +23,8 @@ from mover._collective._step import DECIDED_TOPIC
 from mover._wire import pack
 from tests.helpers.procs import ROOT, cluster
 
+pytestmark = pytest.mark.processes
+
 FRAMES = 50_000
 RSS_BOUND_MB = 50
 SEED = 2026
@@ -50,14 +52,15 @@ WRONG = [
 ]
 
 
-def _frames(node: Node, team: str, rng: random.Random) -> list[tuple[str, str, bytes]]:
+def _frames(node: Node, team: str, rng: random.Random) -> list[tuple[str, str, bytes | bytearray]]:
     """(how, key, frame) triples: how is put or get."""
     sealer = node._sealer
     bc = f"mover/{team}/bc"
     keys = [f"{bc}/news", f"{bc}/flood", f"{bc}/{DECIDED_TOPIC}", f"mover/{team}/ctl/r1"]
     rpc = f"mover/{team}/rpc/r1"
     epoch = node._sessions.verified("r1") or b""
-    out: list[tuple[str, str, bytes]] = []
+    out: list[tuple[str, str, bytes | bytearray]] = []
+    frame: bytes | bytearray
     for i in range(FRAMES):
         kind = i % 8
         key = keys[i % len(keys)]

@@ -10,8 +10,12 @@ import os
 import sys
 from pathlib import Path
 
+import pytest
+
 from mover import Node
 from mover.testing import Cluster, cluster
+
+pytestmark = pytest.mark.processes
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -17,6 +17,8 @@ import pytest
 
 from mover import ConfigError, Node, NodeConfig, Team, free_port
 
+pytestmark = pytest.mark.processes
+
 ROOT = Path(__file__).resolve().parents[2]
 
 

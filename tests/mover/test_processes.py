@@ -38,7 +38,7 @@ from mover import (
 from mover._wire import Opener, Sealer
 from tests.helpers.procs import Cluster, cluster
 
-pytestmark = pytest.mark.asyncio(loop_scope="module")
+pytestmark = [pytest.mark.processes, pytest.mark.asyncio(loop_scope="module")]
 
 POSITIONS = {"r1": (0.0, 0.0, 0.0), "r2": (3.0, 4.0, math.pi / 2), "r3": (6.0, 8.0, math.pi)}
 
@@ -294,7 +294,7 @@ async def _until(predicate: object, timeout: float = 5.0) -> None:
             await asyncio.sleep(0.01)
 
 
-async def _raw_get(node: Node, key: str, frame: bytes) -> bytes:
+async def _raw_get(node: Node, key: str, frame: bytes | bytearray) -> bytes:
     """A raw zenoh get (no mover client), returning the first reply's bytes."""
 
     def get() -> bytes:

@@ -13,6 +13,8 @@ import pytest
 import mover
 import mover.cli
 
+pytestmark = pytest.mark.processes
+
 FACES = [mover, mover.cli]
 
 

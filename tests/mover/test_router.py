@@ -13,6 +13,8 @@ from mover import Node, NodeConfig, Team, free_port
 from mover._config import _read_overrides
 from mover.cli._router import generate_config
 
+pytestmark = pytest.mark.processes
+
 
 async def test_members_talk_through_a_secured_router_and_outsiders_cannot_connect(
     tmp_path: Path,

@@ -23,6 +23,8 @@ from mover._collective import seed_of
 from mover._programs import outcomes
 from tests.helpers.procs import ROOT, Cluster, cluster
 
+pytestmark = pytest.mark.processes
+
 MEMBER = "tests.mover._run_member"
 
 

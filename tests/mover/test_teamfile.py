@@ -13,6 +13,8 @@ from mover._up import needs_router
 from mover._up._plan import PEER_MESH_MAX, derive, members, processes, seeds, uses_router
 from mover._up._teamfile import MAX_PROCESSES, TeamFileError, load_team, parse_team
 
+pytestmark = pytest.mark.processes
+
 ROOT = Path(__file__).resolve().parents[2]
 
 GOOD = """\

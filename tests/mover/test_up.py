@@ -20,6 +20,8 @@ from mover._up import _supervisor
 from mover._up._plan import ProcessPlan
 from tests.helpers.procs import ROOT
 
+pytestmark = pytest.mark.processes
+
 WORLD = ROOT / "worlds" / "search_and_rescue.toml"
 
 SMALL = f"""\

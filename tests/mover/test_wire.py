@@ -67,7 +67,7 @@ def test_malformed_input_raises_wire_error() -> None:
 
 def test_seal_and_open() -> None:
     frame = Sealer("alpha", "ernst", KEY).seal("call", ["add", [1, 2], {}], 7, to="hugo")
-    env = Opener("alpha", KEY).open(frame)
+    env = Opener("alpha", KEY).open(bytes(frame))
     assert (env.sender, env.kind, env.call_id, env.recipient) == ("ernst", "call", 7, "hugo")
     assert env.payload == ["add", [1, 2], {}]
 
@@ -81,21 +81,21 @@ def test_payloads_are_encrypted() -> None:
 def test_wrong_key_or_team_is_refused() -> None:
     frame = Sealer("alpha", "ernst", KEY).seal("call", None)
     with pytest.raises(WireError, match="bad signature"):
-        Opener("alpha", b"x" * 32).open(frame)
+        Opener("alpha", b"x" * 32).open(bytes(frame))
     with pytest.raises(WireError, match="team 'alpha'"):
-        Opener("beta", KEY).open(frame)
+        Opener("beta", KEY).open(bytes(frame))
     tampered = frame[:-20] + bytes([frame[-20] ^ 1]) + frame[-19:]
     with pytest.raises(WireError, match="bad signature"):
-        Opener("alpha", KEY).open(tampered)
+        Opener("alpha", KEY).open(bytes(tampered))
     header_changed = frame.replace(b"ernst", b"ernsT")  # the header is authenticated too
     with pytest.raises(WireError, match="bad signature"):
-        Opener("alpha", KEY).open(header_changed)
+        Opener("alpha", KEY).open(bytes(header_changed))
 
 
 def _addressed(n: int) -> tuple[Sealer, Opener, Sessions, list[Envelope]]:
     sealer, opener, sessions = Sealer("alpha", "ernst", KEY), Opener("alpha", KEY), Sessions()
     frames = [sealer.seal("call", i, i, to="hugo", to_epoch=b"H" * 8) for i in range(n)]
-    return sealer, opener, sessions, [opener.open(f) for f in frames]
+    return sealer, opener, sessions, [opener.open(bytes(f)) for f in frames]
 
 
 def test_replay_is_refused_and_out_of_order_accepted() -> None:
@@ -119,22 +119,22 @@ def test_an_envelope_for_someone_else_or_an_earlier_session_is_refused() -> None
 
 def test_broadcasts_count_only_from_a_verified_session_and_after_we_met() -> None:
     sealer, opener = Sealer("alpha", "ernst", KEY), Opener("alpha", KEY)
-    early = opener.open(sealer.seal("bc", "overheard before we met"))
+    early = opener.open(bytes(sealer.seal("bc", "overheard before we met")))
     sessions = Sessions()
     with pytest.raises(SessionUnknown):
         sessions.admit(early, "hugo", b"H" * 8)
-    hello = opener.open(sealer.seal("hello", {"challenge": b"c"}))
+    hello = opener.open(bytes(sealer.seal("hello", {"challenge": b"c"})))
     sessions.admit(hello, "hugo", b"H" * 8)  # a hello answers our challenge: always let in
     sessions.learn("ernst", hello.epoch, hello.counter)
     with pytest.raises(EnvelopeRefused, match="before we met"):
         sessions.admit(early, "hugo", b"H" * 8)  # a replay to a late joiner
-    fresh = opener.open(sealer.seal("bc", "after"))
+    fresh = opener.open(bytes(sealer.seal("bc", "after")))
     sessions.admit(fresh, "hugo", b"H" * 8)
     with pytest.raises(EnvelopeRefused, match="replayed"):
         sessions.admit(fresh, "hugo", b"H" * 8)
     restarted = Sealer("alpha", "ernst", KEY)  # same name, new session
     with pytest.raises(SessionUnknown):
-        sessions.admit(opener.open(restarted.seal("bc", "x")), "hugo", b"H" * 8)
+        sessions.admit(opener.open(bytes(restarted.seal("bc", "x"))), "hugo", b"H" * 8)
 
 
 def test_replay_state_is_bounded_whatever_the_counter_does() -> None:
@@ -142,13 +142,15 @@ def test_replay_state_is_bounded_whatever_the_counter_does() -> None:
     opener = Opener("alpha", KEY)
     sealer = Sealer("alpha", "ernst", KEY)
     sealer._counter = 2**62  # a counter that jumps far ahead
-    env = opener.open(sealer.seal("call", 0, 0, to="hugo", to_epoch=b"H" * 8))
+    env = opener.open(bytes(sealer.seal("call", 0, 0, to="hugo", to_epoch=b"H" * 8)))
     sessions.admit(env, "hugo", b"H" * 8)
     assert all(state[1].bit_length() <= 64 for state in sessions._state.values())
     for _ in range(20):  # more sessions than it keeps
         s2 = Sealer("alpha", "ernst", KEY)
         sessions.admit(
-            opener.open(s2.seal("call", 0, 0, to="hugo", to_epoch=b"H" * 8)), "hugo", b"H" * 8
+            opener.open(bytes(s2.seal("call", 0, 0, to="hugo", to_epoch=b"H" * 8))),
+            "hugo",
+            b"H" * 8,
         )
     assert len(sessions._state) <= 8
 
@@ -159,4 +161,4 @@ def test_size_limit() -> None:
         sealer.seal("call", b"x" * 2000)
     big = Sealer("alpha", "ernst", KEY).seal("call", b"x" * 2000)
     with pytest.raises(PayloadTooLarge):
-        Opener("alpha", KEY, max_size=1024).open(big)
+        Opener("alpha", KEY, max_size=1024).open(bytes(big))

@@ -6,6 +6,7 @@ from __future__ import annotations
 import asyncio
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -15,6 +16,8 @@ from mover import BadArguments, Node, launch
 from sim_hw.grid import place_resources, random_obstacles
 from tests.helpers.procs import cluster
 from tests.programs._grid import WORLD, start_robots, start_world, write_grid
+
+pytestmark = pytest.mark.processes
 
 BASE = (6, 6)
 
@@ -38,7 +41,7 @@ async def test_four_robot_processes_forage_to_completion(tmp_path: Path) -> None
             launch(node, "foraging", names, {"method": "cmarking", "seed": 3}, run="forage"), 90
         )
         took = time.monotonic() - t0
-        results = {n: o.get("result") for n, o in outcomes.items()}
+        results: dict[str, Any] = {n: o.get("result") for n, o in outcomes.items()}
         assert all(r and r["finished"] for r in results.values()), outcomes
         state = await node.call(WORLD, "state", timeout=5)
         assert state["remaining"] == 0 and state["carried"] == 0
@@ -80,7 +83,7 @@ async def test_sequential_turns_repeat_the_in_process_run_across_processes(tmp_p
             ),
             90,
         )
-        results = {n: o.get("result") for n, o in outcomes.items()}
+        results: dict[str, Any] = {n: o.get("result") for n, o in outcomes.items()}
         assert all(r and r["finished"] for r in results.values()), outcomes
     print(
         f"\nsequential turns: in-process {trial.iterations} iterations, robot processes "

@@ -6,10 +6,13 @@ import asyncio
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from mover import Node, launch
 from tests.helpers.procs import cluster
 from tests.programs._grid import WORLD, start_robots, start_world, write_grid
+
+pytestmark = pytest.mark.processes
 
 
 async def test_two_robots_join_tick_and_forage(tmp_path: Path) -> None:

@@ -1,5 +1,5 @@
 """Programs use ``mover`` and the ``robots`` library only: never the simulated hardware nor
-the experiment runners (DESIGN.md), not even inside a function."""
+the experiment runners (docs/architecture.md, its packages table), not even inside a function."""
 
 from __future__ import annotations
 

@@ -10,11 +10,16 @@ import asyncio
 import signal
 import time
 from pathlib import Path
+from typing import Any
+
+import pytest
 
 from mover import Node, launch
 from sim_hw.grid import place_resources, random_obstacles
 from tests.helpers.procs import cluster
 from tests.programs._grid import WORLD, start_robots, start_world, write_grid
+
+pytestmark = pytest.mark.processes
 
 BASE = (7, 7)
 NAMES = ["k0", "k1", "k2", "k3"]
@@ -46,7 +51,7 @@ async def _run_and_stop_one(tmp_path: Path, sig: signal.Signals, timeout: str) -
         after = await node.call(WORLD, "state", timeout=5)
         assert after["round"] > before, "the world is stuck"
         outcomes = await asyncio.wait_for(run, 90)
-        survivors = {n: outcomes[n].get("result") for n in NAMES if n != "k1"}
+        survivors: dict[str, Any] = {n: outcomes[n].get("result") for n in NAMES if n != "k1"}
         assert all(r and r["finished"] for r in survivors.values()), outcomes
         assert "error" in outcomes["k1"]
         end = await node.call(WORLD, "state", timeout=5)
@@ -92,7 +97,7 @@ async def test_maze_survivors_finish_without_a_killed_member(tmp_path: Path) -> 
                 await asyncio.sleep(0.02)
         procs[1].kill()
         outcomes = await asyncio.wait_for(run, 90)
-        survivors = {n: outcomes[n].get("result") for n in names if n != "m1"}
+        survivors: dict[str, Any] = {n: outcomes[n].get("result") for n in names if n != "m1"}
         assert all(r and r["finished"] for r in survivors.values()), outcomes
         state = await node.call(WORLD, "state", timeout=5)
         assert state["dropped"] == ["m1"] and state["explored"] == state["observable"]

@@ -21,6 +21,8 @@ from mover import launch
 from sim_hw.continuous import TICK, WorldSpec, load_world
 from tests.helpers.procs import ROOT, cluster
 
+pytestmark = pytest.mark.processes
+
 SETUP = replace(Setup(), size=8.0, obstacles=3, max_time=900.0)
 ROBOTS, TARGETS = 3, 2
 

@@ -5,14 +5,18 @@ from __future__ import annotations
 import asyncio
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+import pytest
 
 from experiments.maze import run_trial
 from mover import Node, launch
 from sim_hw.grid import generate_maze, save_maze
 from tests.helpers.procs import cluster
 from tests.programs._grid import WORLD, start_robots, start_world
+
+pytestmark = pytest.mark.processes
 
 SEED = 2
 
@@ -47,7 +51,7 @@ async def test_distributed_maze_run_matches_the_in_process_run(tmp_path: Path) -
             100,
         )
         took = time.monotonic() - t0
-        results = {n: o.get("result") for n, o in outcomes.items()}
+        results: dict[str, Any] = {n: o.get("result") for n, o in outcomes.items()}
         assert all(r and r["finished"] for r in results.values()), outcomes
         state = await node.call(WORLD, "state", timeout=5)
         assert state["explored"] == state["observable"] == reference["observable"]

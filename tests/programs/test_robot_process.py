@@ -11,6 +11,8 @@ import pytest
 from mover import launch
 from tests.helpers.procs import ROOT, cluster
 
+pytestmark = pytest.mark.processes
+
 
 async def test_robot_and_workstation_run_a_program_together() -> None:
     # This is how a user tests a program: mover.testing starts real processes.

@@ -25,6 +25,8 @@ import pytest
 
 from mover import launch
 
+pytestmark = pytest.mark.processes
+
 ROOT = Path(__file__).resolve().parents[2]
 DURATION = 80.0
 NEAR_TARGET = [[2.3, 0.6, 180], [2.3, 1.0, 180], [2.3, 1.4, 180], [2.7, 0.8, 150], [2.7, 1.3, 210]]
@@ -64,7 +66,7 @@ async def test_eye_bots_and_foot_bots_as_robot_processes_navigate_and_learn(
         ),
         120,
     )
-    results = {m: o.get("result") for m, o in outcomes.items()}
+    results: dict[str, Any] = {m: o.get("result") for m, o in outcomes.items()}
     assert all(r is not None for r in results.values()), outcomes
     figures = {
         json.dumps({k: r[k] for k in ("t_1", "t_a", "trips", "start")}) for r in results.values()
@@ -128,7 +130,7 @@ async def test_a_foot_bot_and_an_eye_bot_killed_mid_run_are_left_out(
     outcomes = await asyncio.wait_for(running, 120)
     for victim in victims:
         assert "error" in outcomes[victim] and outcomes[victim].get("result") is None
-    results = {m: outcomes[m].get("result") for m in members if m not in victims}
+    results: dict[str, Any] = {m: outcomes[m].get("result") for m in members if m not in victims}
     assert all(r is not None for r in results.values()), outcomes
     kept = ("t_1", "t_a", "trips", "lost")
     assert len({json.dumps({k: r[k] for k in kept}) for r in results.values()}) == 1

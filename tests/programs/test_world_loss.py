@@ -14,6 +14,8 @@ import pytest
 from mover import launch
 from mover.testing import cluster
 
+pytestmark = pytest.mark.processes
+
 ROOT = Path(__file__).resolve().parents[2]
 WORLD = str(ROOT / "worlds" / "search_and_rescue.toml")
 NAMES = ["elvis", "ernst", "moseley"]

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import asyncio
-from collections.abc import AsyncIterator, Awaitable, Callable, Sequence
+from collections.abc import AsyncIterator, Awaitable, Callable, Mapping, Sequence
 from contextlib import AsyncExitStack
 from pathlib import Path
 from typing import Any
@@ -19,6 +19,9 @@ ROOT = Path(__file__).resolve().parents[2]
 DEMO = ROOT / "worlds" / "search_and_rescue.toml"
 NAMES = ("elvis", "ernst", "moseley")
 
+Mesh = Callable[[Sequence[str]], Awaitable[list[Node]]]
+"""The type of the ``mesh`` fixture: make nodes of one team by name."""
+
 
 @pytest.fixture
 def demo() -> WorldSpec:
@@ -27,7 +30,7 @@ def demo() -> WorldSpec:
 
 
 async def robots_in(
-    world: World, settings: dict[str, dict[str, Any] | None], **kwargs: Any
+    world: World, settings: Mapping[str, Mapping[str, Any] | None], **kwargs: Any
 ) -> tuple[WorldServer, dict[str, Robot]]:
     """A lock-step server over ``world`` and a Robot (no node) for each id → settings."""
     server = WorldServer(world, expect=len(settings), **kwargs)
@@ -59,7 +62,7 @@ async def together(
 
 
 @pytest_asyncio.fixture
-async def mesh() -> AsyncIterator[Callable[[Sequence[str]], Awaitable[list[Node]]]]:
+async def mesh() -> AsyncIterator[Mesh]:
     """Make nodes of one team over zenoh on loopback (no scouting), all in this process."""
     async with AsyncExitStack() as stack:
         team = Team.generate("rescue")

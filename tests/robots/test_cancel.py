@@ -6,17 +6,18 @@ from __future__ import annotations
 import asyncio
 import math
 import random
+from collections.abc import Awaitable, Callable
 
 import pytest
 
 from robots import Robot
 from robots.library import Path, goto_object, pusher, search, sees
-from sim_hw import World
+from sim_hw import World, WorldSpec
 
 from .conftest import robots_in
 
 
-def procedures(robot: Robot):
+def procedures(robot: Robot) -> dict[str, Callable[[], Awaitable[object]]]:
     return {
         "search": lambda: search(robot, sees("box"), rng=random.Random(0)),
         "goto_object": lambda: goto_object(robot, (4.5, 3.0), math.pi, 0.0),
@@ -25,7 +26,7 @@ def procedures(robot: Robot):
 
 
 @pytest.mark.parametrize("name", ["search", "goto_object", "pusher"])
-async def test_cancelled_procedures_stop_the_motors(demo, name: str) -> None:
+async def test_cancelled_procedures_stop_the_motors(demo: WorldSpec, name: str) -> None:
     world = World(demo, seed=0)
     server, robots = await robots_in(world, {"ernst": None})
     robot = robots["ernst"]

@@ -7,16 +7,19 @@ import asyncio
 import contextlib
 import json
 import math
+from pathlib import Path
 
 import programs
 from mover import ProgramHost, launch
 from robots import Robot
 from sim_hw import RobotDropped, World, WorldServer, WorldSpec, in_process
 
+from .conftest import Mesh
+
 PLACES = {"door-a": [5.0, 1.0], "door-b": [5.0, 4.0], "door-c": [2.0, 4.0]}
 
 
-async def test_the_trainee_records_one_snapshot_per_place(mesh, tmp_path) -> None:
+async def test_the_trainee_records_one_snapshot_per_place(mesh: Mesh, tmp_path: Path) -> None:
     world = World(WorldSpec(size=(7.0, 5.5)), seed=2)
     server = WorldServer(world, expect=2)
     ws, *nodes = await mesh(["ws", "trainer", "trainee"])

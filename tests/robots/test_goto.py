@@ -8,7 +8,7 @@ import math
 import pytest
 
 from robots.library import goto_object, goto_point
-from sim_hw import World
+from sim_hw import World, WorldSpec
 
 from .conftest import robots_in
 
@@ -21,7 +21,7 @@ from .conftest import robots_in
     ],
 )
 async def test_goto_object_ends_against_the_object(
-    demo, robot_id: str, heading: float, lateral: float
+    demo: WorldSpec, robot_id: str, heading: float, lateral: float
 ) -> None:
     world = World(demo, seed=1)
     server, robots = await robots_in(world, {robot_id: None})
@@ -44,7 +44,7 @@ async def test_goto_object_ends_against_the_object(
     assert robot.hw.clock.now() < 60
 
 
-async def test_goto_point_avoids_an_obstacle_in_the_way(demo) -> None:
+async def test_goto_point_avoids_an_obstacle_in_the_way(demo: WorldSpec) -> None:
     world = World(demo, seed=1)
     server, robots = await robots_in(world, {"elvis": None})  # at (0.8, 1.0), a wall at x=2.5
     robot = robots["elvis"]

@@ -30,7 +30,7 @@ size = [6.0, 6.0]
 count = 0
 """
 
-pytestmark = pytest.mark.timeout(120)
+pytestmark = [pytest.mark.processes, pytest.mark.timeout(120)]
 
 
 def cpu_seconds(pid: int) -> float:

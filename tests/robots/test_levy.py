@@ -90,13 +90,13 @@ def test_viswanathans_estimate() -> None:
 def test_the_repulsion_is_eq_9_and_zero_beyond_its_range() -> None:
     # ρ = 0.5 straight ahead, ρ0 = 1.5, k = 2: 2 (1/0.5 - 1/1.5) / 0.5² = 10.667, pointing back
     fx, fy = repulsion([(0.5, 0.0)], k_rep=2.0, rho0=1.5)
-    assert (fx, fy) == (pytest.approx(-32.0 / 3.0), pytest.approx(0.0, abs=1e-12))
+    assert (fx, fy) == pytest.approx((-32.0 / 3.0, 0.0))
     # ρ = 1 on the left: (1 - 1/1.5) / 1 = 1/3, pointing right
     fx, fy = repulsion([(1.0, math.pi / 2)], k_rep=1.0, rho0=1.5)
-    assert (fx, fy) == (pytest.approx(0.0, abs=1e-12), pytest.approx(-1.0 / 3.0))
+    assert (fx, fy) == pytest.approx((0.0, -1.0 / 3.0))
     # superposition of the two
     both = repulsion([(0.5, 0.0), (1.0, math.pi / 2)], k_rep=1.0, rho0=1.5)
-    assert both == (pytest.approx(-16.0 / 3.0), pytest.approx(-1.0 / 3.0))
+    assert both == pytest.approx((-16.0 / 3.0, -1.0 / 3.0))
     assert repulsion([(1.6, 0.3), (1.5, 1.0), (3.0, 2.0)], k_rep=1.0, rho0=1.5) == (0.0, 0.0)
 
 

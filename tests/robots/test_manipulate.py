@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 
 from robots.library import Path, pusher, steerer
-from sim_hw import World
+from sim_hw import World, WorldSpec
 
 from .conftest import robots_in, together
 
@@ -21,7 +21,7 @@ def along(world: World, path: Path) -> float:
     return (x - BOX[0]) * math.cos(h) + (y - BOX[1]) * math.sin(h)
 
 
-async def test_pusher_and_steerer_move_the_box_along_the_path(demo) -> None:
+async def test_pusher_and_steerer_move_the_box_along_the_path(demo: WorldSpec) -> None:
     world = World(demo, seed=1)
     settings = {
         "elvis": {"pose": [REAR, BOX[1] - 0.42, 0.0]},  # right corner: pusher
@@ -48,7 +48,7 @@ async def test_pusher_and_steerer_move_the_box_along_the_path(demo) -> None:
     assert all(r["done"] for r in results.values())
 
 
-async def test_a_curved_path(demo) -> None:
+async def test_a_curved_path(demo: WorldSpec) -> None:
     world = World(demo, seed=1)
     settings = {
         "elvis": {"pose": [REAR, BOX[1] - 0.42, 0.0]},
@@ -69,7 +69,7 @@ async def test_a_curved_path(demo) -> None:
     assert math.dist((x, y), (BOX[0] + 2.6, BOX[1] + 0.8)) < 0.6
 
 
-async def test_one_robot_alone_does_not_translate_the_box(demo) -> None:
+async def test_one_robot_alone_does_not_translate_the_box(demo: WorldSpec) -> None:
     world = World(demo, seed=1)
     server, robots = await robots_in(world, {"elvis": {"pose": [REAR, BOX[1] - 0.42, 0.0]}})
     path = Path.relative(BOX, [(3.0, 0.0)])

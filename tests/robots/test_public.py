@@ -8,8 +8,12 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 import programs
 import robots.library as library
+
+pytestmark = pytest.mark.processes
 
 
 def test_every_public_name_exists_and_is_documented() -> None:

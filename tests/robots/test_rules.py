@@ -7,7 +7,7 @@ import random
 
 import pytest
 
-from robots.hal import Sighting
+from robots.hal import BumperSide, Sighting
 from robots.library import (
     Found,
     Path,
@@ -75,7 +75,7 @@ def test_wander_backs_off_a_rejected_object_then_heads_away() -> None:
 
 
 @pytest.mark.parametrize("side", ["left", "right"])
-def test_wander_turns_away_from_a_side_contact(side: str) -> None:
+def test_wander_turns_away_from_a_side_contact(side: BumperSide) -> None:
     walk = Wander(random.Random(4))
     walk.step((0.0, 0.0, 0.0), None, 3.0)
     walk.step((0.0, 0.0, 0.0), side, 3.0)
@@ -104,7 +104,8 @@ def test_kind_ahead_and_locate_use_the_nearest_thing_in_front() -> None:
     assert x == pytest.approx(1.0 - 0.6 * math.sin(0.2)) and y == pytest.approx(
         1.0 + 0.6 * math.cos(0.2)
     )
-    assert locate((0.0, 0.0, 0.0), [], 0.15) == (None, pytest.approx((0.45, 0.0)))
+    nobody, point = locate((0.0, 0.0, 0.0), [], 0.15)
+    assert nobody is None and point == pytest.approx((0.45, 0.0))
 
 
 def test_found_crosses_the_wire_as_a_list() -> None:
@@ -144,7 +145,7 @@ def test_detour_goes_round_the_object_the_short_way() -> None:
 
 def test_station_stands_behind_and_to_the_left() -> None:
     x, y, h = station((4.0, 3.0), math.pi / 2, 0.4, 0.9)
-    assert (x, y, h) == (pytest.approx(3.6), pytest.approx(2.1), math.pi / 2)
+    assert (x, y) == pytest.approx((3.6, 2.1)) and h == math.pi / 2
 
 
 def test_follow_keeps_the_gap_and_looks_for_a_lost_leader() -> None:
@@ -162,33 +163,39 @@ def test_path_progress_cross_track_and_heading() -> None:
     assert path.length() == pytest.approx(4.0)
     assert path.heading() == 0.0
     s, e, h = path.locate((2.0, 1.3))
-    assert (s, e, h) == (pytest.approx(1.0), pytest.approx(0.3), 0.0)
+    assert (s, e) == pytest.approx((1.0, 0.3)) and h == 0.0
     s, e, h = path.locate((3.2, 2.0))
-    assert (s, e, h) == (pytest.approx(3.0), pytest.approx(-0.2), pytest.approx(math.pi / 2))
+    assert (s, e, h) == pytest.approx((3.0, -0.2, math.pi / 2))
     assert path.locate((3.0, 3.5))[0] == pytest.approx(4.5)  # overshoot counts
     assert path.shifted((0.0, -0.4)).vertices()[0] == (1.0, 0.6)
 
 
 def test_stations_put_the_finder_at_the_right_corner_as_pusher() -> None:
     roles = stations("moseley", ["elvis", "ernst", "moseley"], 1.2)
-    assert roles == {
-        "moseley": ("pusher", pytest.approx(-0.42)),
-        "elvis": ("steerer", pytest.approx(0.0)),
-        "ernst": ("steerer", pytest.approx(0.42)),
-    }
-    assert stations("a", ["a", "b"], 0.6) == {
-        "a": ("pusher", pytest.approx(-0.12)),
-        "b": ("steerer", pytest.approx(0.12)),
-    }
+    assert _roles(roles) == {"moseley": "pusher", "elvis": "steerer", "ernst": "steerer"}
+    assert _offsets(roles) == pytest.approx({"moseley": -0.42, "elvis": 0.0, "ernst": 0.42})
+    pair = stations("a", ["a", "b"], 0.6)
+    assert _roles(pair) == {"a": "pusher", "b": "steerer"}
+    assert _offsets(pair) == pytest.approx({"a": -0.12, "b": 0.12})
+
+
+def _roles(stationed: dict[str, tuple[str, float]]) -> dict[str, str]:
+    return {name: role for name, (role, _) in stationed.items()}
+
+
+def _offsets(stationed: dict[str, tuple[str, float]]) -> dict[str, float]:
+    return {name: offset for name, (_, offset) in stationed.items()}
 
 
 def test_object_pose_from_a_sighting() -> None:
     # a robot at the right rear corner sees the centre 45° to its left
     s = seen("box", "victim", math.hypot(0.4, 0.4), math.pi / 4)
     x, y, h = object_pose((0.0, 0.0, 0.1), s, math.pi / 4)
-    assert (x, y) == (
-        pytest.approx(0.4 * math.sqrt(2) * math.cos(math.pi / 4 + 0.1)),
-        pytest.approx(0.4 * math.sqrt(2) * math.sin(math.pi / 4 + 0.1)),
+    assert (x, y) == pytest.approx(
+        (
+            0.4 * math.sqrt(2) * math.cos(math.pi / 4 + 0.1),
+            0.4 * math.sqrt(2) * math.sin(math.pi / 4 + 0.1),
+        )
     )
     assert h == pytest.approx(0.1)
 

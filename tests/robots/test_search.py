@@ -8,7 +8,7 @@ import random
 import pytest
 
 from robots import Robot
-from robots.library import approach, kind_ahead, locate, movable, search, sees
+from robots.library import Predicate, approach, kind_ahead, locate, movable, search, sees
 from sim_hw import BoxSpec, ImmovableSpec, World, WorldSpec
 
 from .conftest import robots_in
@@ -16,7 +16,9 @@ from .conftest import robots_in
 SEED = 1  # a run that tests walls, the pillar and the 2-robot box before the crate
 
 
-def spying(predicate, log: list[tuple[str | None, bool]], by_id: bool = False):
+def spying(
+    predicate: Predicate, log: list[tuple[str | None, bool]], by_id: bool = False
+) -> Predicate:
     """The predicate, logging what the camera saw ahead at each check (its kind, or its id)
     and the verdict; "wall" stands for walls and static obstacles, which the camera omits."""
 
@@ -35,7 +37,7 @@ def spying(predicate, log: list[tuple[str | None, bool]], by_id: bool = False):
 
 @pytest.mark.parametrize(("robot_id", "seed"), [("ernst", 0), ("elvis", 5), ("moseley", 7)])
 async def test_search_finds_the_box_and_ignores_walls_and_immovables(
-    demo, robot_id: str, seed: int
+    demo: WorldSpec, robot_id: str, seed: int
 ) -> None:
     world = World(demo, seed=seed)
     server, robots = await robots_in(world, {robot_id: None})
@@ -57,7 +59,7 @@ async def test_search_finds_the_box_and_ignores_walls_and_immovables(
     assert all(ok == (kind == "box") for kind, ok in checks)
 
 
-async def test_search_gives_up_when_the_terminator_says_so(demo) -> None:
+async def test_search_gives_up_when_the_terminator_says_so(demo: WorldSpec) -> None:
     server, robots = await robots_in(World(demo), {"elvis": None})
     robot = robots["elvis"]
 
@@ -92,7 +94,7 @@ PUSHED = WorldSpec(
         ((2.0, 6.0), False),  # the 2-robot box: one robot cannot move it, even off-centre
     ],
 )
-async def test_movable_is_the_push_test(target, expected: bool) -> None:
+async def test_movable_is_the_push_test(target: tuple[float, float], expected: bool) -> None:
     x0, y0 = target[0] - 1.2, target[1] + 0.12  # a little off-centre
     server, robots = await robots_in(World(PUSHED), {"r": {"pose": [x0, y0, 0.0]}})
     robot = robots["r"]

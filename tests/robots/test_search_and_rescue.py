@@ -15,13 +15,15 @@ import pytest
 import programs
 from mover import ProgramHost, launch
 from robots import Robot
-from sim_hw import RobotDropped, World, WorldServer, in_process
+from sim_hw import RobotDropped, World, WorldServer, WorldSpec, in_process
 
-from .conftest import NAMES
+from .conftest import NAMES, Mesh
 
 
 @pytest.mark.parametrize("seed", [3, 4, 7])
-async def test_three_robots_find_gather_and_move_the_box(demo, mesh, seed: int) -> None:
+async def test_three_robots_find_gather_and_move_the_box(
+    demo: WorldSpec, mesh: Mesh, seed: int
+) -> None:
     world = World(demo, seed=seed)
     server = WorldServer(world, expect=len(NAMES))
     ws, *nodes = await mesh(["ws", *NAMES])

@@ -8,7 +8,11 @@ import os
 import sys
 from pathlib import Path
 
+import pytest
+
 from mover.testing import cluster
+
+pytestmark = pytest.mark.processes
 
 ROOT = Path(__file__).resolve().parents[2]
 WORLD = str(ROOT / "worlds" / "search_and_rescue.toml")

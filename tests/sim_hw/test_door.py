@@ -214,4 +214,4 @@ async def test_owned_stays_until_its_round_by_itself() -> None:
             await hw.clock.tick()
             return int(hw.clock.now())
 
-    assert await asyncio.wait_for(asyncio.gather(run(a), run(b)), 2) == [4, 4]
+    assert list(await asyncio.wait_for(asyncio.gather(run(a), run(b)), 2)) == [4, 4]

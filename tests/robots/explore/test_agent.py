@@ -126,7 +126,7 @@ def test_public_face() -> None:
 
 
 def test_unexplored_in_view_counts_each_ray_up_to_its_first_obstacle() -> None:
-    from robots.explore._sensing import RAYS
+    from robots.grid_hal import STAR_RAYS as RAYS  # what robots.explore._sensing looks along
 
     rng = np.random.default_rng(2)
     known = rng.choice([UNKNOWN, FREE, OBSTACLE], size=(12, 12)).astype(np.int8)

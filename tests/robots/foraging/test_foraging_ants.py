@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Literal, overload
+
 import numpy as np
 
 from robots.foraging import AntAgent, AntNeighbour, AntPerception, CMarkingAgent
@@ -48,7 +50,15 @@ def test_searching_ant_climbs_pheromone_away_from_home() -> None:
     assert a.step(AntPerception(90.0, 0, False, nbrs, (-1.0, 0.0))).move == 1
 
 
-def world_with(kind: str, n: int, seed: int) -> tuple[GridWorld, list]:
+@overload
+def world_with(kind: Literal["ants"], n: int, seed: int) -> tuple[GridWorld, list[AntAgent]]: ...
+@overload
+def world_with(
+    kind: Literal["cmarking"], n: int, seed: int
+) -> tuple[GridWorld, list[CMarkingAgent]]: ...
+def world_with(
+    kind: str, n: int, seed: int
+) -> tuple[GridWorld, list[AntAgent] | list[CMarkingAgent]]:
     lay = parse_text(CAVITY)
     assert lay.base is not None
     res = {(7, 10): 300}

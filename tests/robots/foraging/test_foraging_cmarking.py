@@ -23,9 +23,13 @@ def agent(seed: int = 0, **kw: object) -> CMarkingAgent:
     return CMarkingAgent(np.random.default_rng(seed), **kw)  # type: ignore[arg-type]
 
 
-def perception(value: int, colour: int, resource: int, *nbrs: tuple) -> Perception:
+def perception(
+    value: int, colour: int, resource: int, *nbrs: tuple[int, int, int, int]
+) -> Perception:
     """Neighbours as (direction, value, colour, resource)."""
-    return Perception(value, colour, resource, False, tuple(Neighbour(*n, False) for n in nbrs))
+    return Perception(
+        value, colour, resource, False, tuple(Neighbour(d, v, c, r, False) for d, v, c, r in nbrs)
+    )
 
 
 def test_loading_chooses_the_return_task() -> None:

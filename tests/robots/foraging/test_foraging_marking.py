@@ -101,7 +101,7 @@ def test_field_converges_in_a_maze_with_one_agent() -> None:
 def test_seeded_agents_repeat_exactly() -> None:
     grid = random_obstacles(15, 15, 0.2, 1, keep_free=((7, 7),))
 
-    def trajectory(seed: int) -> list:
+    def trajectory(seed: int) -> list[tuple[int, ...]]:
         world = GridWorld(grid, (7, 7), None, 3)
         agents = [MarkingAgent(r) for r in np.random.default_rng(seed).spawn(3)]
         out = []

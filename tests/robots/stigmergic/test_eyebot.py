@@ -8,7 +8,9 @@ import pytest
 from robots.stigmergic import SPACING, EyeBot, FootBotSeen, Goal, direction_index, trip_weight
 
 
-def _moving(heading: float, at: tuple[float, float] = (0.5, -0.3), goal: Goal = Goal.TARGET):
+def _moving(
+    heading: float, at: tuple[float, float] = (0.5, -0.3), goal: Goal = Goal.TARGET
+) -> FootBotSeen:
     front = (at[0] + 0.1 * math.cos(heading), at[1] + 0.1 * math.sin(heading))
     return FootBotSeen(beacon=at, front=front, goal=goal)
 

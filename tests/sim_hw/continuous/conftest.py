@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import pytest
 
+from robots.hal import Hardware
 from sim_hw import World, WorldServer, WorldSpec
 
 
@@ -13,7 +16,9 @@ def arena() -> WorldSpec:
     return WorldSpec(size=(10.0, 8.0))
 
 
-async def start(world: World, robots: dict[str, dict], **kwargs):
+async def start(
+    world: World, robots: dict[str, dict[str, Any]], **kwargs: Any
+) -> tuple[WorldServer, dict[str, Hardware]]:
     """A lock-step server over ``world`` and the HALs of ``robots`` (id → settings)."""
     import asyncio
 

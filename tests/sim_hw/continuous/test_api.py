@@ -6,9 +6,13 @@ import inspect
 import subprocess
 import sys
 
+import pytest
+
 import robots.hal as hal
 import sim_hw
 from sim_hw import World, WorldServer, WorldSpec, in_process
+
+pytestmark = pytest.mark.processes
 
 
 def test_all_names_exist_and_are_documented() -> None:

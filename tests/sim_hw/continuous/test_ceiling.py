@@ -25,7 +25,9 @@ def test_a_foot_bot_under_an_eye_bot_hears_only_that_eye_bot() -> None:
     )
     ceiling = Ceiling(world, EYES)
     ceiling.sense()
-    assert ceiling.above("f1") == ("e1", pytest.approx(math.pi / 2))  # θ0 = north, it faces east
+    above = ceiling.above("f1")
+    assert above is not None and above[0] == "e1"
+    assert above[1] == pytest.approx(math.pi / 2)  # θ0 = north, it faces east
     assert ceiling.above("f2") is None  # between the cones
     eye, theta0 = ceiling.above("f3") or ("", 0.0)
     assert eye == "e2" and theta0 == pytest.approx(-1.0)

@@ -6,6 +6,7 @@ import math
 
 import pytest
 
+from robots.hal import Hardware
 from sim_hw import BoxSpec, MarkerSpec, ObstacleSpec, RobotSpec, SonarSpec, World, WorldSpec
 
 from .conftest import start
@@ -20,6 +21,7 @@ def test_sonar_ranges_from_the_rim() -> None:
     world = World(spec)
     sonar = SonarSpec(rays=4, max_range=3.0)
     readings = world.add_robot("r", RobotSpec(pose=(8.5, 4.0, 0.0), sonar=sonar))
+    assert readings["sonar"] is not None
     east, north, west, south = readings["sonar"]
     assert east == pytest.approx(10.0 - 8.5 - R, abs=1e-6)  # wall face at x = 10
     assert north == 3.0  # 3.85 m away: beyond range
@@ -32,6 +34,7 @@ def test_sonar_turns_with_the_robot() -> None:
     sonar = SonarSpec(rays=4, max_range=3.0)
     readings = world.add_robot("r", RobotSpec(pose=(5.0, 1.0, math.pi / 2), sonar=sonar))
     # facing north: ray 2 (behind) points south, 1 m from the wall at y = 0
+    assert readings["sonar"] is not None
     assert readings["sonar"][2] == pytest.approx(1.0 - R, abs=1e-6)
 
 
@@ -62,6 +65,7 @@ def test_camera_reports_range_bearing_and_status() -> None:
     world = World(spec)
     world.add_robot("other", RobotSpec(pose=(1.5, 0.5, 0.0), led="busy"))
     readings = world.add_robot("me", RobotSpec(pose=(1.0, 1.0, 0.0)))
+    assert readings["cam"] is not None
     seen = {s[1]: s for s in readings["cam"]}
     assert set(seen) == {"box", "t", "other"}
     assert seen["box"][:3] == ["box", "box", "red"]
@@ -129,6 +133,8 @@ async def test_floor_cells_and_led() -> None:
         world, {"a": {"pose": [1.2, 1.2, 0.0]}, "b": {"pose": [2.2, 1.2, 180.0]}}
     )  # degrees
     a, b = hws["a"], hws["b"]
+    assert a.floor is not None and b.floor is not None and a.led is not None  # every robot has
+    assert b.camera is not None and a.radio is not None  # these devices by default
     assert a.floor.read().value == 7
     assert a.floor.read().colour == "green"
     b.floor.write(3, "red")
@@ -142,7 +148,7 @@ async def test_floor_cells_and_led() -> None:
     await server.aclose()
 
 
-async def asyncio_tick(*hws) -> None:
+async def asyncio_tick(*hws: Hardware) -> None:
     import asyncio
 
     await asyncio.gather(*(hw.clock.tick() for hw in hws))

@@ -58,7 +58,9 @@ async def _run(pause: float, how: str = "in_process") -> dict[str, list[Any]]:
         return await _walk_with_idling(server, a, b, pause)
 
 
-async def _walk_with_idling(server: WorldServer, a: Any, b: Any, pause: float) -> Any:
+async def _walk_with_idling(
+    server: WorldServer, a: Any, b: Any, pause: float
+) -> dict[str, list[Any]]:
     ra, rb = np.random.default_rng(10), np.random.default_rng(11)
     seen: dict[str, list[Any]] = {"a": [], "b": []}
     a_idle, b_back, over = asyncio.Event(), asyncio.Event(), asyncio.Event()

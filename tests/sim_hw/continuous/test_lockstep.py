@@ -10,10 +10,17 @@ from typing import Any
 import numpy as np
 import pytest
 
+from robots.hal import Hardware
 from sim_hw import RobotDropped, World, WorldServer, in_process, random_obstacles
 from sim_hw.continuous._walker import random_walk
 
 NOISY = {"sonar": {"noise": 0.02}, "odometry": {"trans_noise": 0.05, "drift": 0.02}}
+
+
+def _ranges(hw: Hardware) -> tuple[float, ...]:
+    """The robot's sonar ranges (the test worlds' robots all have a sonar)."""
+    assert hw.sonar is not None
+    return hw.sonar.ranges()
 
 
 async def _run(
@@ -63,7 +70,8 @@ async def test_joins_are_answered_at_the_start_with_the_readings_then() -> None:
     b = await asyncio.wait_for(first, 1)
     assert list(server.world.robots) == ["a", "b"]  # re-created in id order
     # b's first readings are those after the start (a re-created beside it), not at its join
-    assert b.sonar.ranges() == tuple(server.world.readings("b")["sonar"])
+    sonar = server.world.readings("b")["sonar"]
+    assert sonar is not None and _ranges(b) == tuple(sonar)
     await asyncio.gather(b.clock.tick(), second.clock.tick())
     assert server.world.tick == 1
     await server.aclose()
@@ -74,7 +82,7 @@ async def test_the_first_readings_do_not_depend_on_the_order_of_the_joins() -> N
         server = WorldServer(World(random_obstacles((6.0, 6.0), 4), seed=3), expect=2)
         joins = {n: asyncio.ensure_future(in_process(server, n)) for n in order}  # in order
         hws = {n: await asyncio.wait_for(j, 1) for n, j in joins.items()}
-        seen = {n: (hw.sonar.ranges(), hw.odometry.pose()) for n, hw in sorted(hws.items())}
+        seen = {n: (_ranges(hw), hw.odometry.pose()) for n, hw in sorted(hws.items())}
         await server.aclose()
         return seen
 

@@ -29,7 +29,7 @@ def _push_with(n: int, seconds: float = 5.0) -> float:
     for _ in range(round(seconds / 0.1)):
         world.step()
     x, y, _ = world.box_pose("big")
-    return ((x - BOX.center[0]) ** 2 + (y - BOX.center[1]) ** 2) ** 0.5
+    return float(((x - BOX.center[0]) ** 2 + (y - BOX.center[1]) ** 2) ** 0.5)
 
 
 def test_one_robot_cannot_translate_the_box() -> None:
@@ -48,12 +48,15 @@ def test_two_robots_can() -> None:
         (ImmovableSpec("pillar", center=(5.0, 4.0), size=(0.4, 0.4)), False),
     ],
 )
-async def test_push_sense_tells_movable_from_not(thing, moved: bool) -> None:
+async def test_push_sense_tells_movable_from_not(
+    thing: BoxSpec | ImmovableSpec, moved: bool
+) -> None:
     boxes = (thing,) if isinstance(thing, BoxSpec) else ()
     immovables = (thing,) if isinstance(thing, ImmovableSpec) else ()
     world = World(WorldSpec(size=(10.0, 8.0), boxes=boxes, immovables=immovables))
     x = 5.0 - thing.size[0] / 2 - 0.15 - 0.05
     server, hws = await start(world, {"r": {"pose": [x, 4.0, 0.0]}})
+    assert hws["r"].push is not None
     result = await hws["r"].push.push(force=50.0, duration=2.0)
     assert result.object_id == thing.id
     assert result.moved is moved
@@ -63,6 +66,7 @@ async def test_push_sense_tells_movable_from_not(thing, moved: bool) -> None:
 async def test_push_with_nothing_ahead_reports_nothing() -> None:
     world = World(WorldSpec(size=(10.0, 8.0)))
     server, hws = await start(world, {"r": {"pose": [2.0, 4.0, 0.0]}})
+    assert hws["r"].push is not None
     result = await hws["r"].push.push(force=50.0, duration=0.5)
     assert result.object_id is None
     assert not result.moved

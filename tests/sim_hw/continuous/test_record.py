@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -25,7 +26,7 @@ WORLDS = Path(__file__).parents[3] / "worlds"
 async def _record(path: Path) -> World:
     world = World(load_world(WORLDS / "search_and_rescue.toml"), seed=2)
     recorder = Recorder(path, world)
-    snapshots: list[dict] = []
+    snapshots: list[dict[str, Any]] = []
     server = WorldServer(
         world, expect=2, on_tick=recorder, snapshot_every=5, on_snapshot=snapshots.append
     )
@@ -42,7 +43,7 @@ async def _record(path: Path) -> World:
     return world
 
 
-async def test_recording_and_replay(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+async def test_recording_and_replay(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     rec = tmp_path / "run.jsonl"
     await _record(rec)
     header, ticks = read_recording(rec)
@@ -55,7 +56,7 @@ async def test_recording_and_replay(tmp_path: Path, capsys: pytest.CaptureFixtur
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
-def test_replay_errors(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+def test_replay_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["replay", str(tmp_path / "none.jsonl"), "--out", "x.png"]) == 2
     assert "no such file" in capsys.readouterr().err
     junk = tmp_path / "junk.jsonl"
@@ -66,7 +67,7 @@ def test_replay_errors(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
     assert "no header line" in ours[0]
 
 
-def test_world_rejects_a_bad_file(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+def test_world_rejects_a_bad_file(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     bad = tmp_path / "bad.toml"
     bad.write_text("[world]\nsize = [10, -1]\n")
     assert main(["world", str(bad), "--lockstep"]) == 2

@@ -6,6 +6,7 @@ import asyncio
 import json
 import logging
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -78,13 +79,13 @@ async def test_the_png_of_the_search_and_rescue_recording(tmp_path: Path) -> Non
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
-def _lines(ticks: list[dict]) -> list[str]:
+def _lines(ticks: list[dict[str, Any]]) -> list[str]:
     header = {"type": "header", "name": "t", "size": [4.0, 3.0], "seed": 0, "obstacles": [],
               "boxes": [], "immovables": [], "markers": []}  # fmt: skip
     return [json.dumps(header)] + [json.dumps({"type": "tick", **t}) for t in ticks]
 
 
-def _tick(n: int, x: float) -> dict:
+def _tick(n: int, x: float) -> dict[str, Any]:
     return {"tick": n, "t": n / 10, "robots": {"r": [x, 1.0, 0.0, ""]}, "boxes": {}}
 
 

@@ -12,6 +12,7 @@ import json
 import os
 import signal
 import sys
+from collections.abc import AsyncIterator
 from pathlib import Path
 
 import numpy as np
@@ -22,7 +23,7 @@ from mover._cli import main
 from sim_hw import World, WorldServer, in_process, load_world, read_recording
 from sim_hw.continuous._walker import random_walk
 
-pytestmark = pytest.mark.timeout(90)
+pytestmark = [pytest.mark.processes, pytest.mark.timeout(90)]
 
 ROOT = Path(__file__).resolve().parents[3]
 WORLD = """
@@ -78,7 +79,9 @@ class Procs:
             world=True,
         )
 
-    async def walker(self, robot: str, seed: int, ticks: int, out: Path):
+    async def walker(
+        self, robot: str, seed: int, ticks: int, out: Path
+    ) -> asyncio.subprocess.Process:
         return await self.start(
             "-m",
             "sim_hw.continuous._walker",
@@ -101,7 +104,7 @@ class Procs:
 
 
 @pytest.fixture
-async def procs():
+async def procs() -> AsyncIterator[Procs]:
     p = Procs()
     yield p
     await p.close()
@@ -112,10 +115,12 @@ async def _finish(proc: asyncio.subprocess.Process, limit: float = 60.0) -> tupl
     return proc.returncode or 0, err.decode()
 
 
-async def _in_process(path: Path, seed: int, walkers: dict[str, int], ticks: int):
+async def _in_process(
+    path: Path, seed: int, walkers: dict[str, int], ticks: int
+) -> dict[str, list[list[float]]]:
     server = WorldServer(World(load_world(path), seed=seed), expect=len(walkers))
 
-    async def walk(robot: str, rng_seed: int):
+    async def walk(robot: str, rng_seed: int) -> list[list[float]]:
         hw = await in_process(server, robot, SPEC)
         return await random_walk(hw, np.random.default_rng(rng_seed), ticks)
 
@@ -124,7 +129,9 @@ async def _in_process(path: Path, seed: int, walkers: dict[str, int], ticks: int
     return dict(zip(walkers, tracks, strict=True))
 
 
-async def test_remote_and_in_process_give_the_same_trajectories(procs: Procs, tmp_path: Path):
+async def test_remote_and_in_process_give_the_same_trajectories(
+    procs: Procs, tmp_path: Path
+) -> None:
     path = tmp_path / "field.toml"
     path.write_text(WORLD)
     walkers, ticks = {"r0": 100, "r1": 101}, 80

@@ -128,10 +128,9 @@ async def test_each_kind_joins_as_itself_and_a_wrong_kind_is_refused() -> None:
 async def test_an_instruction_is_heard_after_the_tick_by_the_foot_bots_under_that_eye_bot() -> None:
     server = await _server(expect=5)
     try:
-        e1, e2, f1, f2, f3 = await asyncio.gather(
-            eyebot_in_process(server, "e1"),
-            eyebot_in_process(server, "e2"),
-            *(footbot_in_process(server, f) for f in ("f1", "f2", "f3")),
+        (e1, e2), (f1, f2, f3) = await asyncio.gather(
+            asyncio.gather(eyebot_in_process(server, "e1"), eyebot_in_process(server, "e2")),
+            asyncio.gather(*(footbot_in_process(server, f) for f in ("f1", "f2", "f3"))),
         )
         assert f1.up.above() is None  # e1 has sent nothing yet
         e1.irrb.send(Instruction(to_source=0.5, to_target=-1.0))
@@ -150,7 +149,7 @@ async def test_an_instruction_is_heard_after_the_tick_by_the_foot_bots_under_tha
         assert f3.area.area() is Goal.SOURCE and f1.area.area() is None
         # the downward camera: f1 0.2 m east and 0.1 north of e1, in e1's frame (x north)
         (spot,) = e1.camera.below()
-        assert spot.beacon == (pytest.approx(0.1), pytest.approx(-0.2))
+        assert spot.beacon == pytest.approx((0.1, -0.2))
         assert read_leds(spot.led) == (False, Goal.TARGET) and spot.front is not None
         assert spot.front[1] < spot.beacon[1]  # it faces east: -y in e1's frame
         (spot3,) = e2.camera.below()
@@ -164,20 +163,27 @@ async def _run(seed: int, duration: float = 40.0) -> tuple[list[Any], list[Any]]
     spec = load_world(ROOT / "worlds" / "stigmergic_navigation.toml")
     eyes, feet = [e.id for e in spec.eyebots], sorted(spec.robots)
     server = WorldServer(World(spec, seed=seed), expect=len(eyes) + len(feet))
-    hws = await asyncio.gather(
-        *(eyebot_in_process(server, e) for e in eyes),
-        *(footbot_in_process(server, f) for f in feet),
+    eye_hws, foot_hws = await asyncio.gather(
+        asyncio.gather(*(eyebot_in_process(server, e) for e in eyes)),
+        asyncio.gather(*(footbot_in_process(server, f) for f in feet)),
     )
-    rng = np.random.SeedSequence(seed).spawn(len(hws))
-    until = hws[0].clock.now() + duration
-    loops = [
-        eyebot_loop(hw, EyeBot(np.random.default_rng(r)), 1.0, until)
-        for hw, r in zip(hws[: len(eyes)], rng, strict=False)
-    ] + [
-        footbot_loop(hw, FootBot(np.random.default_rng(r)), until)
-        for hw, r in zip(hws[len(eyes) :], rng[len(eyes) :], strict=True)
-    ]
-    done = await asyncio.gather(*loops)
+    rng = np.random.SeedSequence(seed).spawn(len(eyes) + len(feet))
+    until = eye_hws[0].clock.now() + duration
+    eyes_done, feet_done = await asyncio.gather(
+        asyncio.gather(
+            *(
+                eyebot_loop(hw, EyeBot(np.random.default_rng(r)), 1.0, until)
+                for hw, r in zip(eye_hws, rng, strict=False)
+            )
+        ),
+        asyncio.gather(
+            *(
+                footbot_loop(hw, FootBot(np.random.default_rng(r)), until)
+                for hw, r in zip(foot_hws, rng[len(eyes) :], strict=True)
+            )
+        ),
+    )
+    done = [*eyes_done, *feet_done]
     poses = [server.world.pose(f) for f in feet]
     await server.aclose()
     return list(done), poses

@@ -30,8 +30,9 @@ def test_search_and_rescue_file_fields() -> None:
     spec = load_world(Path(__file__).parents[3] / "worlds" / "search_and_rescue.toml")
     assert spec.size == (9.0, 6.0)
     assert spec.robots["moseley"].pose == (0.8, 5.0, 0.0)
-    assert spec.robots["ernst"].sonar.noise == 0.01
-    assert spec.robot.camera.fov == pytest.approx(math.radians(120))
+    sonar, camera = spec.robots["ernst"].sonar, spec.robot.camera
+    assert sonar is not None and sonar.noise == 0.01
+    assert camera is not None and camera.fov == pytest.approx(math.radians(120))
     victim = next(b for b in spec.boxes if b.id == "victim")
     assert (victim.mass, victim.friction) == (20.0, 0.5)
 

@@ -36,7 +36,7 @@ def corridor_server(**kw: Any) -> GridServer:
 
 async def test_a_round_waits_for_every_robot_and_applies_actions_in_name_order() -> None:
     server = corridor_server(exclusive=True, expect=2)
-    a, _ = await asyncio.gather(
+    a, _b = await asyncio.gather(
         server.join("a", {"start": [1, 1]}), server.join("b", {"start": [1, 3]})
     )
     assert a["readings"]["round"] == 0 and a["readings"]["hears"] == ["b"]

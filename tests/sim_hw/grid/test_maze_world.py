@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -159,7 +160,7 @@ def test_an_exclusive_world_keeps_agents_apart_in_apply_too() -> None:
         GridWorld(grid, (0, 0), starts=[(0, 1), (0, 1)], exclusive=True)
 
 
-def test_maze_file_round_trip(tmp_path) -> None:
+def test_maze_file_round_trip(tmp_path: Path) -> None:
     maze = generate_maze(10, 0.5, np.random.default_rng(1), n_starts=4)
     path = tmp_path / "m.json"
     save_maze(path, maze)
@@ -206,7 +207,7 @@ def test_maze_file_round_trip(tmp_path) -> None:
         ),
     ],
 )
-def test_bad_maze_files_name_the_file_and_fault(tmp_path, content: str, fault: str) -> None:
+def test_bad_maze_files_name_the_file_and_fault(tmp_path: Path, content: str, fault: str) -> None:
     path = tmp_path / "bad.json"
     path.write_text(content)
     with pytest.raises(MazeFileError) as err:
@@ -215,6 +216,6 @@ def test_bad_maze_files_name_the_file_and_fault(tmp_path, content: str, fault: s
     assert isinstance(err.value, ConfigError)
 
 
-def test_missing_maze_file(tmp_path) -> None:
+def test_missing_maze_file(tmp_path: Path) -> None:
     with pytest.raises(MazeFileError, match="cannot read"):
         load_maze(tmp_path / "nope.json")

@@ -52,7 +52,8 @@ def _by_path(entities: list[tuple[str, Any, bool]]) -> dict[str, tuple[Any, bool
 
 
 def _positions(arch: Any) -> list[list[float]]:
-    return np.asarray(arch.positions.pa_array.to_pylist()).tolist()
+    positions: list[list[float]] = np.asarray(arch.positions.pa_array.to_pylist()).tolist()
+    return positions
 
 
 def _strips(arch: Any) -> list[list[list[float]]]:

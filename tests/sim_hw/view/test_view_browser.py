@@ -26,6 +26,8 @@ from sim_hw.view._entities import rgb
 from ._browser import count_near, distinct_pixels, find_browser, screenshots
 from .test_view_cli import expect_line
 
+pytestmark = pytest.mark.processes
+
 ROOT = Path(__file__).resolve().parents[3]
 WORLD = str(ROOT / "worlds" / "search_and_rescue.toml")
 NAMES = ["ernst", "moseley"]

@@ -17,6 +17,8 @@ from mover._cli import main
 from mover._config import free_port
 from mover.testing import cluster
 
+pytestmark = pytest.mark.processes
+
 ROOT = Path(__file__).resolve().parents[3]
 WORLD = str(ROOT / "worlds" / "search_and_rescue.toml")
 
