@@ -27,6 +27,7 @@ from importlib.metadata import EntryPoint, entry_points
 from typing import Any
 
 from mover import Node, NodeConfig, ProgramHost, RunClock, Team
+from mover._futures import failure
 
 from ._robot import Robot
 from .backend import BaseHardware, H, HardwareBackend, check_options
@@ -240,7 +241,7 @@ class HostClock(RunClock):
             return  # idle already (or the hardware is lost)
         self._stop = asyncio.Event()
         self._task = asyncio.get_running_loop().create_task(self._idle(self._stop, old))
-        self._task.add_done_callback(_retrieved)
+        self._task.add_done_callback(failure)
 
     async def _idle(self, stop: asyncio.Event, after: asyncio.Task[None] | None) -> None:
         if after is not None:
@@ -267,8 +268,3 @@ class HostClock(RunClock):
         for task in tasks:
             task.cancel()
         await asyncio.gather(*tasks, return_exceptions=True)
-
-
-def _retrieved(task: asyncio.Task[Any]) -> None:
-    if not task.cancelled():
-        task.exception()  # retrieved: an idle task that failed (the node closing) is no one's

@@ -10,8 +10,8 @@ import asyncio
 import contextlib
 import math
 from collections.abc import AsyncIterator, Awaitable, Callable
-from typing import Any
 
+from mover._futures import failure
 from robots.hal import HardwareLost
 
 from ._link import WorldLink
@@ -82,7 +82,7 @@ class Ticks:
             task = self._task
         if task is None or task.done():
             task = self._task = asyncio.get_running_loop().create_task(self._exchange(make))
-            task.add_done_callback(_retrieved)
+            task.add_done_callback(failure)
         self._waiting += 1
         try:
             await asyncio.shield(task)
@@ -92,9 +92,9 @@ class Ticks:
     async def _finish(self, task: asyncio.Task[None]) -> None:
         """Wait for ``task`` to end; raise what it raised if it lost the hardware."""
         await asyncio.wait([task])
-        failure = None if task.cancelled() else task.exception()
-        if isinstance(failure, HardwareLost):
-            raise failure
+        lost = failure(task)
+        if isinstance(lost, HardwareLost):
+            raise lost
 
     async def _exchange(self, make: Callable[[], Command]) -> None:
         if self._lost is not None:
@@ -184,8 +184,3 @@ class Ticks:
 
     async def _wait_change(self) -> None:
         await self._changed.wait()
-
-
-def _retrieved(task: asyncio.Task[Any]) -> None:
-    if not task.cancelled():
-        task.exception()  # retrieved: the caller that awaited it, if any, was told

@@ -14,6 +14,7 @@ from collections.abc import Awaitable, Callable
 from typing import Any, Protocol
 
 from .._clock import IdleClock
+from .._futures import failure
 from ._group import Settled
 
 Spawn = Callable[[Awaitable[Any]], "asyncio.Task[Settled]"]
@@ -63,7 +64,7 @@ class TimedOp:
             finally:
                 waiter.cancel()
                 await asyncio.gather(waiter, return_exceptions=True)
-            lost = waiter.done() and not waiter.cancelled() and waiter.exception() is not None
+            lost = waiter.done() and failure(waiter) is not None
             if lost and self.finished_at is None:
                 return {"out": True}  # the hardware went away: this run will not claim
             for _ in range(3):  # an operation the same readings ended returns first

@@ -24,6 +24,7 @@ from .._exceptions import (
     RemoteError,
     WireError,
 )
+from .._futures import failure
 from .._session import FaultLog
 from ._operations import Operations
 from ._reach import wait_reachable
@@ -102,7 +103,7 @@ class Collectives:
             run, step = key
             log.warning("%s: step %s of run %r never decided: dropped", self.node.name, step, run)
             old.decision.set_exception(MemberLost(f"step {step} of run {run!r} was never decided"))
-            old.decision.exception()  # retrieved: it may have no waiter left
+            failure(old.decision)  # retrieved: it may have no waiter left
             old.told = True  # its waiters were told, and there is nothing to announce
             _cancel_all(old.asking)
 
