@@ -8,11 +8,11 @@ import contextlib
 import math
 import random
 import time
-from collections.abc import AsyncIterator
+from collections.abc import AsyncIterator, Awaitable, Callable, Mapping
 
 import pytest
 
-from mover import MemberLost, Node, TaskTeam
+from mover import MemberLost, Node, Outcome, TaskTeam
 
 DT = 0.1  # simulated seconds per tick
 
@@ -109,7 +109,7 @@ def walker(
     wall_after: float = 0.0,
     jitter: random.Random | None = None,
     returned: dict[str, float] | None = None,
-):  # type: ignore[no-untyped-def]
+) -> Callable[[], Awaitable[str]]:
     """An operation that ticks until simulated time ``until``, then stops holding the world (a
     finished robot waits idle), spends ``wall_after`` wall seconds, and returns its name."""
 
@@ -130,9 +130,11 @@ def walker(
     return op
 
 
-async def run_or(teams: list[TaskTeam], ops: dict[str, object]) -> list[object]:
+async def run_or(
+    teams: list[TaskTeam], ops: Mapping[str, Callable[[], Awaitable[str]]]
+) -> list[Outcome]:
     return await asyncio.wait_for(
-        asyncio.gather(*(t.distributed_or(ops[t.me]) for t in teams)),  # type: ignore[arg-type]
+        asyncio.gather(*(t.distributed_or(ops[t.me]) for t in teams)),
         20,
     )
 
@@ -157,7 +159,7 @@ async def test_the_first_in_simulated_time_wins_though_its_claim_comes_last(
             for name, clock in fake.items()
         }
         outs = await run_or(teams, ops)
-        assert {o.winner for o in outs} == {expected}  # type: ignore[attr-defined]
+        assert {o.winner for o in outs} == {expected}
         assert returned["n1"] < returned.get("n3", math.inf)  # n1 was first in wall time
 
 
@@ -175,8 +177,8 @@ async def test_the_winner_does_not_depend_on_wall_clock_jitter(nodes: list[Node]
             for name, clock in fake.items()
         }
         outs = await run_or(teams, ops)
-        assert len({o.winner for o in outs}) == 1  # type: ignore[attr-defined]
-        winners.append(outs[0].winner)  # type: ignore[attr-defined]
+        assert len({o.winner for o in outs}) == 1
+        winners.append(outs[0].winner)
     assert winners == ["n3"] * 3
 
 
@@ -195,7 +197,7 @@ async def test_a_tie_in_simulated_time_goes_to_the_first_by_name(nodes: list[Nod
         for name, clock in fake.items()
     }
     outs = await run_or(teams, ops)
-    assert {o.winner for o in outs} == {"n2"}  # type: ignore[attr-defined]
+    assert {o.winner for o in outs} == {"n2"}
     assert returned["n4"] < returned["n2"]
 
 
@@ -210,7 +212,7 @@ async def test_a_short_simulated_step_costs_3_n_minus_3_messages(
     teams, fake = timed_teams(nodes, world, "cost")
     ops = {name: walker(clock, 0.3 if name == "n2" else 1e9) for name, clock in fake.items()}
     outs = await run_or(teams, ops)
-    assert {o.winner for o in outs} == {"n2"}  # type: ignore[attr-defined]
+    assert {o.winner for o in outs} == {"n2"}
     n = len(nodes)
     assert sum(t.metrics[0].messages for t in teams) == 3 * (n - 1)
 
@@ -231,7 +233,7 @@ async def test_a_member_leaving_while_the_others_wait_for_it(
 
     ops = {name: walker(clock, 0.1 if name == "n1" else 1e9) for name, clock in fake.items()}
     ops["n4"] = hang
-    tasks = [asyncio.ensure_future(t.distributed_or(ops[t.me])) for t in teams]  # type: ignore[arg-type]
+    tasks = [asyncio.ensure_future(t.distributed_or(ops[t.me])) for t in teams]
     await asyncio.sleep(0.5)
     assert not any(t.done() for t in tasks)  # waiting for n4 to go past 0.1 s
     assert world.time == pytest.approx(0.1)
@@ -265,7 +267,7 @@ async def test_the_designated_members_questions_end_with_their_owner(nodes: list
 
     ops = {name: walker(clock, 0.2 if name == "n2" else 1e9) for name, clock in fake.items()}
     ops["n1"] = idle
-    steps = [asyncio.ensure_future(t.distributed_or(ops[t.me])) for t in teams]  # type: ignore[arg-type]
+    steps = [asyncio.ensure_future(t.distributed_or(ops[t.me])) for t in teams]
     designated = teams[0].collectives
     async with asyncio.timeout(10):
         while not (asked := [q for s in designated._steps.values() for q in s.asking.values()]):

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import asyncio
+import functools
+from collections.abc import Awaitable, Callable
 
 import pytest
 
@@ -17,7 +19,7 @@ def teams(nodes: list[Node], run: str = "r", **kw: object) -> list[TaskTeam]:
 async def test_or_first_finisher_wins_and_losers_clean_up(nodes: list[Node]) -> None:
     cleaned: list[str] = []
 
-    def op(name: str, delay: float):
+    def op(name: str, delay: float) -> Callable[[], Awaitable[str]]:
         async def run() -> str:
             try:
                 await asyncio.sleep(delay)
@@ -43,7 +45,7 @@ async def test_or_ties_agree(nodes: list[Node]) -> None:
         async def now(t: TaskTeam) -> str:
             return t.me
 
-        outs = await asyncio.gather(*(t.distributed_or(lambda t=t: now(t)) for t in ts))
+        outs = await asyncio.gather(*(t.distributed_or(functools.partial(now, t)) for t in ts))
         assert len({o.winner for o in outs}) == 1
 
 
@@ -56,7 +58,7 @@ async def test_and_gives_everyone_all_results_both_variants(nodes: list[Node]) -
             return int(t.me[1:]) ** 2
 
         outs = await asyncio.gather(
-            *(t.distributed_and(lambda t=t: op(t), designated=designated) for t in ts)
+            *(t.distributed_and(functools.partial(op, t), designated=designated) for t in ts)
         )
         assert all(o == {f"n{i}": i * i for i in range(5)} for o in outs)
     n = len(nodes)
@@ -75,7 +77,7 @@ async def test_and_reports_failed_operations(nodes: list[Node]) -> None:
         return "ok"
 
     outs = await asyncio.gather(
-        *(t.distributed_and(lambda t=t: op(t)) for t in ts), return_exceptions=True
+        *(t.distributed_and(functools.partial(op, t)) for t in ts), return_exceptions=True
     )
     assert isinstance(outs[3], RuntimeError)
     assert outs[0]["n3"] == OperationFailed("RuntimeError", "stuck")  # type: ignore[index]
@@ -91,7 +93,7 @@ async def test_continuation_gets_the_outcome(nodes: list[Node]) -> None:
     async def then(outcome: object) -> str:
         return f"continued after {outcome.winner}"  # type: ignore[attr-defined]
 
-    outs = await asyncio.gather(*(t.distributed_or(lambda t=t: op(t), then) for t in ts))
+    outs = await asyncio.gather(*(t.distributed_or(functools.partial(op, t), then) for t in ts))
     assert outs == ["continued after n4"] * 5
 
 
@@ -105,7 +107,7 @@ async def test_a_member_leaving_during_and_fails_the_step_or_is_survived(
         await asyncio.sleep(3600 if t.me == "n3" else 0.01)  # n3 never finishes
         return t.me
 
-    tasks = [asyncio.ensure_future(t.distributed_and(lambda t=t: op(t))) for t in ts]
+    tasks = [asyncio.ensure_future(t.distributed_and(functools.partial(op, t))) for t in ts]
     await asyncio.sleep(0.2)
     tasks[3].cancel()
     await nodes[3].close()  # as if n3's process died
@@ -129,7 +131,7 @@ async def test_a_run_of_its_own_policy_survives_on_a_node_that_fails_by_default(
         await asyncio.sleep(3600 if t.me == "n2" else 0.01)
         return t.me
 
-    tasks = [asyncio.ensure_future(t.distributed_and(lambda t=t: op(t))) for t in ts]
+    tasks = [asyncio.ensure_future(t.distributed_and(functools.partial(op, t))) for t in ts]
     await asyncio.sleep(0.2)
     tasks[2].cancel()
     await nodes[2].close()
@@ -145,7 +147,7 @@ async def test_a_long_or_step_costs_2n_messages(nodes: list[Node]) -> None:
         await asyncio.sleep(0.5 if t.me == "n3" else 5.0)  # longer than POLL_AFTER
         return t.me
 
-    outs = await asyncio.gather(*(t.distributed_or(lambda t=t: op(t)) for t in ts))
+    outs = await asyncio.gather(*(t.distributed_or(functools.partial(op, t)) for t in ts))
     assert {o.winner for o in outs} == {"n3"}
     total = sum(t.metrics[0].messages for t in ts)
     assert total == 2 * len(nodes)  # n-1 polls and answers, the claim and its answer
@@ -175,6 +177,7 @@ async def test_a_malformed_decision_leaves_every_listener_alive(nodes: list[Node
     members, sender = nodes[:4], nodes[4]
     ts = teams(members)
     await asyncio.sleep(0.2)  # the listeners' subscriptions reach the sender
+    bad: object
     for bad in (["r", "1", []], ["r", 1.5, []], [1, 1, []], ["r", 1, "x"], "junk", None, {}):
         sender.broadcast_nowait(DECIDED_TOPIC, bad, reliable=True)
     await asyncio.sleep(0.3)
