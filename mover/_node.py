@@ -4,7 +4,7 @@ A node joins a team, exports procedures, calls other members' procedures, broadc
 subscribes (range-limited or team-wide), and keeps a live view of the team. Use it as an async
 context manager::
 
-    async with Node("ernst", team=Team.from_env()) as node:
+    async with Node("ernst", team=TeamCredentials.from_env()) as node:
         node.export(add)
         total = await node.call("hugo", "add", 1, 2, timeout=1.0)
 """
@@ -80,12 +80,17 @@ class Node:
         self._sealer = self._state.sealer  # for tests that forge frames as this node
         self._sessions = self._state.peers
         self.radio = Radio(locator, radio)
-        self.team: Membership = Membership(self._state)
+        self.membership: Membership = Membership(self._state)  # who is in the team now
         self._server = RpcServer(self._state)
         self._server.export(self.procedures, "mover.procedures")
         self._client = RpcClient(self._state, self.team)
         self._pubsub = PubSub(self._state, self.radio, self.team)
         self._declared: list[Any] = []
+
+    @property
+    def team(self) -> Membership:
+        """Deprecated name of :attr:`membership` (goes in the next release)."""
+        return self.membership
 
     @property
     def team_name(self) -> str:
