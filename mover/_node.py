@@ -83,8 +83,8 @@ class Node:
         self.membership: Membership = Membership(self._state)  # who is in the team now
         self._server = RpcServer(self._state)
         self._server.export(self.procedures, "mover.procedures")
-        self._client = RpcClient(self._state, self.team)
-        self._pubsub = PubSub(self._state, self.radio, self.team)
+        self._client = RpcClient(self._state, self.membership)
+        self._pubsub = PubSub(self._state, self.radio, self.membership)
         self._declared: list[Any] = []
 
     @property
@@ -108,8 +108,8 @@ class Node:
         session = await run_blocking(lambda: zenoh.open(conf))
         self._state.opened(session, portal)
         team = self.team_config.name
-        self.team.on_leave(self._member_left)
-        self.team.on_gone(self._server.cancel)  # a caller gone for good: stop its calls
+        self.membership.on_leave(self._member_left)
+        self.membership.on_gone(self._server.cancel)  # a caller gone for good: stop its calls
         self._declared += [
             session.declare_queryable(
                 _keys.rpc(team, self.name),
@@ -120,12 +120,12 @@ class Node:
                 _keys.ctl(team, self.name), portal.callback(self._server.on_ctl, size=sample_size)
             ),
             session.declare_queryable(
-                _keys.hello(team, self.name), portal.callback(self.team.on_hello_query)
+                _keys.hello(team, self.name), portal.callback(self.membership.on_hello_query)
             ),
         ]
         self._declared.append(
             session.liveliness().declare_subscriber(
-                _keys.alive(team, "*"), portal.callback(self.team.on_token), history=True
+                _keys.alive(team, "*"), portal.callback(self.membership.on_token), history=True
             )
         )
         if self.unique:
@@ -142,15 +142,15 @@ class Node:
                 await asyncio.sleep(0.02)  # zenoh offers no event for this: poll
         # The liveliness history says who is there: a token of our name is a holder.
         deadline = time.monotonic() + 0.5
-        while not self.team.has_token(self.name) and time.monotonic() < deadline:  # noqa: ASYNC110
+        while not self.membership.has_token(self.name) and time.monotonic() < deadline:  # noqa: ASYNC110
             await asyncio.sleep(0.02)
-        holders = await self.team.holders(self.name)
+        holders = await self.membership.holders(self.name)
         for _ in range(5):  # its token is there: its hello may take a moment to be routed
-            if holders or not self.team.has_token(self.name):
+            if holders or not self.membership.has_token(self.name):
                 break
             await asyncio.sleep(0.2)
-            holders = await self.team.holders(self.name)
-        if holders or self.team.has_token(self.name):
+            holders = await self.membership.holders(self.name)
+        if holders or self.membership.has_token(self.name):
             await self.close()
             who = (
                 f"{holders[0].kind} pid {holders[0].pid} on {holders[0].host}"
