@@ -11,15 +11,15 @@ in one line rather than as a bug. Everything else lives in private modules; the 
 helpers shared by every process are in :mod:`mover.cli`.
 
 Deprecated (they warn, and go in the next release): ``Team`` (now :class:`TeamCredentials`),
-``TaskTeam`` (now :class:`RunTeam`), ``free_port`` (now in :mod:`mover.testing`), and
-``Collectives`` and ``StepMetrics`` (internals: a program never needs them).
+``TaskTeam`` (now :class:`RunTeam`), and ``Collectives``, ``StepMetrics`` and ``free_port``
+(internals: a program never needs them).
 """
 
 import importlib as _importlib
 import typing as _typing
-import warnings as _warnings
 from collections.abc import Callable as _Callable
 
+from . import _deprecated
 from ._clock import IdleClock
 from ._config import NodeConfig, TeamCredentials
 from ._exceptions import (
@@ -110,17 +110,14 @@ def _moved(module: str, name: str) -> _Callable[[], object]:
     return find
 
 
-# Deprecated names: (where each is now, the advice its warning gives); each goes in the next
-# release. Those in _UNSWEPT are still used inside this repository and are served silently
-# until its own uses are renamed; then they leave _UNSWEPT and warn like the others.
+# Deprecated names: (where each is now, the advice its warning gives); see mover._deprecated.
 _DEPRECATED: dict[str, tuple[_Callable[[], object], str]] = {
     "Team": (_moved("._config", "TeamCredentials"), "use mover.TeamCredentials (the same class)"),
     "TaskTeam": (_moved("._tasks", "TaskTeam"), "use mover.RunTeam (the same team, with report)"),
     "Collectives": (_moved("._tasks", "Collectives"), "an internal: ProgramHost makes one"),
     "StepMetrics": (_moved("._tasks", "StepMetrics"), "an internal: RunTeam.metrics holds them"),
-    "free_port": (_moved("._config", "free_port"), "moved to mover.testing"),
+    "free_port": (_moved("._config", "free_port"), "an internal: NodeConfig listens on port 0"),
 }
-_UNSWEPT = frozenset({"Team", "TaskTeam", "free_port"})
 
 
 def __getattr__(name: str) -> object:
@@ -128,10 +125,5 @@ def __getattr__(name: str) -> object:
     if name not in _DEPRECATED:
         raise AttributeError(f"module 'mover' has no attribute {name!r}")
     find, advice = _DEPRECATED[name]
-    if name not in _UNSWEPT:
-        _warnings.warn(
-            f"mover.{name} is deprecated and goes in the next release: {advice}",
-            DeprecationWarning,
-            stacklevel=2,
-        )
+    _deprecated.warn(f"mover.{name}", advice)
     return find()

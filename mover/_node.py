@@ -20,7 +20,7 @@ from typing import Any, Literal
 
 import zenoh
 
-from . import _keys
+from . import _deprecated, _keys
 from ._bridge import Portal, run_blocking, sample_size
 from ._config import NodeConfig, Team
 from ._exceptions import MoverError, NameTaken
@@ -90,6 +90,7 @@ class Node:
     @property
     def team(self) -> Membership:
         """Deprecated name of :attr:`membership` (goes in the next release)."""
+        _deprecated.warn("Node.team", "use Node.membership")
         return self.membership
 
     @property
