@@ -4,7 +4,7 @@ A behaviour written against the HAL runs unchanged on these: a clock that ticks 
 drive that records its commands, odometry that integrates them, a sonar whose ranges a test
 sets. ``fake_hardware()`` builds a :class:`robots.hal.Hardware` of them::
 
-    clock, sonar = FakeClock(tick_period=0.1), FakeSonar(ranges=(0.2, 2.0, 2.0))
+    clock, sonar = FakeClock(tick_period=0.1), FakeSonar(readings=(0.2, 2.0, 2.0))
     hw = fake_hardware("ada", clock=clock, sonar=sonar)
     await my_behaviour(hw)          # it ticks; the odometry follows its drive
     assert clock.now() == pytest.approx(1.0)
