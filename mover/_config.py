@@ -1,4 +1,4 @@
-"""How a node reaches the others (NodeConfig) and which team it belongs to (Team).
+"""How a node reaches the others (NodeConfig) and which team it belongs to (TeamCredentials).
 
 Default: zenoh peer mode on loopback, multicast scouting off, listening on a free port; peers
 find each other by connecting to one or more known endpoints and zenoh's gossip links the rest.
@@ -46,8 +46,10 @@ _KNOBS: dict[str, tuple[str, float, float]] = {
 
 
 @dataclass(frozen=True)
-class Team:
-    """A team: its name and its secret key (every envelope is sealed under keys derived from it)."""
+class TeamCredentials:
+    """What a node needs to join a team: the team's name and its secret key (every envelope is
+    sealed under keys derived from it). Who is in the team now is ``node.membership``; who runs
+    a program together is a :class:`~mover.RunTeam`."""
 
     name: str
     key: bytes = field(repr=False)
@@ -58,12 +60,12 @@ class Team:
             raise ConfigError(f"a team key must be at least {MIN_KEY_BYTES} bytes")
 
     @classmethod
-    def generate(cls, name: str) -> Team:
+    def generate(cls, name: str) -> TeamCredentials:
         """A team with a fresh random 32-byte key."""
         return cls(name, secrets.token_bytes(32))
 
     @classmethod
-    def from_env(cls, name: str | None = None) -> Team:
+    def from_env(cls, name: str | None = None) -> TeamCredentials:
         """The team named by ``MOVER_TEAM`` (or ``name``) with its key from the environment."""
         name = name or os.environ.get("MOVER_TEAM")
         if not name:
@@ -88,6 +90,9 @@ class Team:
     def env(self) -> dict[str, str]:
         """Environment variables that let a child process join this team."""
         return {"MOVER_TEAM": self.name, "MOVER_TEAM_KEY": self.key.hex()}
+
+
+Team = TeamCredentials  # the name before; mover.Team is deprecated (mover/__init__.py)
 
 
 @dataclass(frozen=True)

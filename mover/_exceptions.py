@@ -26,6 +26,10 @@
     └── NodeClosed                 the node was closed while the operation was pending
 
 Errors cross processes as data (type name and message), never as pickled objects.
+
+Beside the tree, :class:`ExpectedFault` marks the faults of what mover runs (a robot's hardware
+that went away, ``robots.hal.HardwareLost``) that a program run reports in one line, as it does
+every MoverError, rather than as a bug with its traceback.
 """
 
 from __future__ import annotations
@@ -140,3 +144,12 @@ class NameTaken(MoverError):
 CALL_ERRORS: dict[str, type[CallError]] = {
     cls.__name__: cls for cls in (UnknownProcedure, BadArguments, Refused)
 }
+
+
+class ExpectedFault(Exception):
+    """Base of the faults that are expected in a robot's life (its hardware went away), not bugs.
+
+    A program run that fails with one is logged in one line, without a traceback, as one that
+    fails with a :class:`MoverError`. Subclass it (``class HardwareLost(ExpectedFault)``) rather
+    than mark a class otherwise: ``except ExpectedFault`` then catches every such fault.
+    """

@@ -4,7 +4,7 @@ A node joins a team, exports procedures, calls other members' procedures, broadc
 subscribes (range-limited or team-wide), and keeps a live view of the team. Use it as an async
 context manager::
 
-    async with Node("ernst", team=Team.from_env()) as node:
+    async with Node("ernst", team=TeamCredentials.from_env()) as node:
         node.export(add)
         total = await node.call("hugo", "add", 1, 2, timeout=1.0)
 """
@@ -20,7 +20,7 @@ from typing import Any, Literal
 
 import zenoh
 
-from . import _keys
+from . import _deprecated, _keys
 from ._bridge import Portal, run_blocking, sample_size
 from ._config import NodeConfig, Team
 from ._exceptions import MoverError, NameTaken
@@ -80,12 +80,18 @@ class Node:
         self._sealer = self._state.sealer  # for tests that forge frames as this node
         self._sessions = self._state.peers
         self.radio = Radio(locator, radio)
-        self.team: Membership = Membership(self._state)
+        self.membership: Membership = Membership(self._state)  # who is in the team now
         self._server = RpcServer(self._state)
         self._server.export(self.procedures, "mover.procedures")
-        self._client = RpcClient(self._state, self.team)
-        self._pubsub = PubSub(self._state, self.radio, self.team)
+        self._client = RpcClient(self._state, self.membership)
+        self._pubsub = PubSub(self._state, self.radio, self.membership)
         self._declared: list[Any] = []
+
+    @property
+    def team(self) -> Membership:
+        """Deprecated name of :attr:`membership` (goes in the next release)."""
+        _deprecated.warn("Node.team", "use Node.membership")
+        return self.membership
 
     @property
     def team_name(self) -> str:
@@ -103,8 +109,8 @@ class Node:
         session = await run_blocking(lambda: zenoh.open(conf))
         self._state.opened(session, portal)
         team = self.team_config.name
-        self.team.on_leave(self._member_left)
-        self.team.on_gone(self._server.cancel)  # a caller gone for good: stop its calls
+        self.membership.on_leave(self._member_left)
+        self.membership.on_gone(self._server.cancel)  # a caller gone for good: stop its calls
         self._declared += [
             session.declare_queryable(
                 _keys.rpc(team, self.name),
@@ -115,12 +121,12 @@ class Node:
                 _keys.ctl(team, self.name), portal.callback(self._server.on_ctl, size=sample_size)
             ),
             session.declare_queryable(
-                _keys.hello(team, self.name), portal.callback(self.team.on_hello_query)
+                _keys.hello(team, self.name), portal.callback(self.membership.on_hello_query)
             ),
         ]
         self._declared.append(
             session.liveliness().declare_subscriber(
-                _keys.alive(team, "*"), portal.callback(self.team.on_token), history=True
+                _keys.alive(team, "*"), portal.callback(self.membership.on_token), history=True
             )
         )
         if self.unique:
@@ -137,15 +143,15 @@ class Node:
                 await asyncio.sleep(0.02)  # zenoh offers no event for this: poll
         # The liveliness history says who is there: a token of our name is a holder.
         deadline = time.monotonic() + 0.5
-        while not self.team.has_token(self.name) and time.monotonic() < deadline:  # noqa: ASYNC110
+        while not self.membership.has_token(self.name) and time.monotonic() < deadline:  # noqa: ASYNC110
             await asyncio.sleep(0.02)
-        holders = await self.team.holders(self.name)
+        holders = await self.membership.holders(self.name)
         for _ in range(5):  # its token is there: its hello may take a moment to be routed
-            if holders or not self.team.has_token(self.name):
+            if holders or not self.membership.has_token(self.name):
                 break
             await asyncio.sleep(0.2)
-            holders = await self.team.holders(self.name)
-        if holders or self.team.has_token(self.name):
+            holders = await self.membership.holders(self.name)
+        if holders or self.membership.has_token(self.name):
             await self.close()
             who = (
                 f"{holders[0].kind} pid {holders[0].pid} on {holders[0].host}"

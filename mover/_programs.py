@@ -47,6 +47,7 @@ from ._collective import (
 from ._exceptions import (
     BadArguments,
     CallError,
+    ExpectedFault,
     MoverError,
     Refused,
     RobotLost,
@@ -428,6 +429,6 @@ def _metrics(team: TaskTeam) -> list[dict[str, Any]]:
 
 
 def _expected(exc: BaseException) -> bool:
-    """Whether a run's failure is a fault it could expect (mover's errors, or an exception
-    whose class says ``expected = True``, as a lost hardware's does), not a bug."""
-    return isinstance(exc, MoverError) or bool(getattr(exc, "expected", False))
+    """Whether a run's failure is a fault it could expect (mover's errors, or an
+    :class:`~mover.ExpectedFault`, as a lost hardware is), not a bug."""
+    return isinstance(exc, (MoverError, ExpectedFault))

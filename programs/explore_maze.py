@@ -65,7 +65,7 @@ async def _hear(
     got = inbox.pop(round, {})
     deadline = time.monotonic() + HEAR_TIMEOUT
     while True:
-        missing = {m for m in expected - set(got) if m in node.team}
+        missing = {m for m in expected - set(got) if m in node.membership}
         if not missing or time.monotonic() > deadline:
             if missing:
                 robot.log.warning("round %d: no broadcast from %s", round, sorted(missing))

@@ -22,6 +22,8 @@ from contextlib import AbstractAsyncContextManager
 from dataclasses import dataclass
 from typing import Literal, Protocol, runtime_checkable
 
+from mover import ExpectedFault
+
 __all__ = [
     "MARK",
     "MARKED",
@@ -82,14 +84,13 @@ MARKED = "marked"
 """The status a marked target shows to cameras (its "repelling signal")."""
 
 
-class HardwareLost(Exception):
+class HardwareLost(ExpectedFault):
     """The hardware went away: a simulated world that stopped, a body that dropped the robot.
 
     Raised by a device call or a clock tick; the robot process waits for the hardware and
-    connects again, and a program that was running fails with it.
+    connects again, and a program that was running fails with it (an expected fault: reported
+    in one line, not as a bug).
     """
-
-    expected = True  # a fault to report in one line, not a bug (see mover's ProgramHost)
 
 
 @dataclass(frozen=True, slots=True)

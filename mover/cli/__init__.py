@@ -7,7 +7,7 @@ ways). Nothing here opens a session or reads the environment until it is called:
 
 * :func:`add_team_arguments` — ``--team NAME`` (default ``$MOVER_TEAM``; the key comes from
   ``$MOVER_TEAM_KEY`` or ``$MOVER_TEAM_KEY_FILE``) and ``--connect ENDPOINT`` (repeatable), and
-  :func:`team_from_args` to turn them into a :class:`~mover.Team` and a
+  :func:`team_from_args` to turn them into a :class:`~mover.TeamCredentials` and a
   :class:`~mover.NodeConfig`;
 * :func:`add_log_arguments` and :func:`setup_logging` — ``-v/--verbose`` (``-v`` INFO, ``-vv``
   DEBUG) and ``--log-level LEVEL``; with neither, ``$MOVER_LOG_LEVEL`` (``LOG_LEVEL_ENV``),
@@ -27,7 +27,7 @@ import os
 import signal
 import typing
 
-from .._config import NodeConfig, Team
+from .._config import NodeConfig, TeamCredentials
 from .._keys import check_name as _check_name
 from .._orphans import guarded
 
@@ -165,7 +165,8 @@ def add_team_arguments(parser: argparse.ArgumentParser) -> None:
     """Add ``--team NAME`` and ``--connect ENDPOINT`` (repeatable) to ``parser``.
 
     Both are None when not given: :func:`team_from_args` then reads ``$MOVER_TEAM`` and
-    ``$MOVER_CONNECT`` (see :meth:`mover.Team.from_env`, :meth:`mover.NodeConfig.from_env`).
+    ``$MOVER_CONNECT`` (see :meth:`mover.TeamCredentials.from_env`,
+    :meth:`mover.NodeConfig.from_env`).
     """
     parser.add_argument(
         "--team",
@@ -180,13 +181,13 @@ def add_team_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def team_from_args(args: argparse.Namespace) -> tuple[Team, NodeConfig]:
+def team_from_args(args: argparse.Namespace) -> tuple[TeamCredentials, NodeConfig]:
     """The team and node settings of :func:`add_team_arguments`' options and the environment.
 
     Raises :class:`UsageError` (one line) when the team, its key or an endpoint is wrong.
     """
     try:
-        return Team.from_env(args.team), NodeConfig.from_env(args.connect or ())
+        return TeamCredentials.from_env(args.team), NodeConfig.from_env(args.connect or ())
     except ValueError as exc:
         raise UsageError(str(exc)) from None
 

@@ -15,7 +15,8 @@ import time
 from pathlib import Path
 from typing import Any
 
-from mover import Collectives, FixedLocator, Node, NodeConfig, Team
+from mover import FixedLocator, Node, NodeConfig, Team
+from mover._collective import Collectives
 
 TOPICS = ("news", "chatter", "probe")
 

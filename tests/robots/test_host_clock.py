@@ -1,4 +1,5 @@
-"""robots.process.HostClock, the host's run clock over a robot's hardware (in one process)."""
+"""robots.process.HostClock, the host's run clock over a robot's hardware (in one process): on
+a lock-step world in-process, and on the HAL fakes of robots.testing."""
 
 from __future__ import annotations
 
@@ -6,12 +7,13 @@ import asyncio
 
 import pytest
 
-from robots.hal import HardwareLost
+from robots.hal import Hardware, HardwareLost
 from robots.process import HostClock
+from robots.testing import FakeClock, FakeDrive, fake_hardware
 from sim_hw import RobotDropped, World, WorldServer, in_process, random_obstacles
 
 
-async def _world(*names: str) -> tuple[WorldServer, list[object]]:
+async def _world(*names: str) -> tuple[WorldServer, list[Hardware]]:
     server = WorldServer(World(random_obstacles((6.0, 6.0), 0)), expect=len(names))
     hws = await asyncio.gather(*(in_process(server, n) for n in names))
     return server, list(hws)
@@ -26,20 +28,20 @@ async def _idle_is(server: WorldServer, idle: list[str]) -> None:
 async def test_release_idles_and_engage_returns_once_the_world_waits_for_us() -> None:
     server, (a, b) = await _world("a", "b")
     lost: asyncio.Future[HardwareLost] = asyncio.get_running_loop().create_future()
-    clock = HostClock(a, lost)  # type: ignore[arg-type]
-    a.drive.set_velocity(0.3, 0.0)  # type: ignore[attr-defined]
+    clock = HostClock(a, lost)
+    a.drive.set_velocity(0.3, 0.0)
     clock.release()
     clock.release()  # idle already: nothing more
     await _idle_is(server, ["a"])
-    await asyncio.wait_for(b.clock.sleep(0.5), 2)  # type: ignore[attr-defined]
+    await asyncio.wait_for(b.clock.sleep(0.5), 2)
     assert server.world.robots["a"].v == 0.0  # stopped when idling began
     assert clock.now() == pytest.approx(0.5)  # the readings kept coming
     await asyncio.gather(clock.engage(), clock.engage())  # two runs start together
     assert server.idle_robots == frozenset()
     passed = asyncio.ensure_future(clock.passed(0.6))
-    await asyncio.gather(a.clock.tick(), b.clock.tick())  # type: ignore[attr-defined]
+    await asyncio.gather(a.clock.tick(), b.clock.tick())
     assert not passed.done()  # a command on the readings of t = 0.5 is not past 0.6
-    await asyncio.gather(a.clock.tick(), b.clock.tick())  # type: ignore[attr-defined]
+    await asyncio.gather(a.clock.tick(), b.clock.tick())
     await asyncio.wait_for(passed, 1)  # one on those of t = 0.6 is
     clock.release()
     await _idle_is(server, ["a"])
@@ -50,7 +52,7 @@ async def test_release_idles_and_engage_returns_once_the_world_waits_for_us() ->
 async def test_a_release_during_an_engage_idles_again() -> None:
     server, (a,) = await _world("a")
     lost: asyncio.Future[HardwareLost] = asyncio.get_running_loop().create_future()
-    clock = HostClock(a, lost)  # type: ignore[arg-type]
+    clock = HostClock(a, lost)
     clock.release()
     await _idle_is(server, ["a"])
     engaging = asyncio.ensure_future(clock.engage())
@@ -65,7 +67,7 @@ async def test_a_release_during_an_engage_idles_again() -> None:
 async def test_a_robot_dropped_while_idle_is_lost() -> None:
     server, (a,) = await _world("a")
     lost: asyncio.Future[HardwareLost] = asyncio.get_running_loop().create_future()
-    clock = HostClock(a, lost)  # type: ignore[arg-type]
+    clock = HostClock(a, lost)
     clock.release()
     await _idle_is(server, ["a"])
     server.drop("a", "left the team")
@@ -74,3 +76,31 @@ async def test_a_robot_dropped_while_idle_is_lost() -> None:
         await clock.engage()
     await clock.aclose()
     await server.aclose()
+
+
+async def test_on_fake_hardware_the_clock_is_the_hardware_s_and_a_loss_is_reported() -> None:
+    clock, drive = FakeClock(tick_period=0.1), FakeDrive()
+    hw = fake_hardware("a", clock=clock, drive=drive)
+    lost: asyncio.Future[HardwareLost] = asyncio.get_running_loop().create_future()
+    host = HostClock(hw, lost)
+    hw.drive.set_velocity(0.3, 0.0)
+    host.release()
+    async with asyncio.timeout(1):
+        while not clock.idle:
+            await asyncio.sleep(0)
+    assert (drive.v, drive.omega) == (0.0, 0.0)  # stopped as idling began
+    await host.engage()
+    assert not clock.idle
+    passed = asyncio.ensure_future(host.passed(0.1))
+    await clock.tick()
+    await clock.tick()  # a command on the readings of t = 0.1
+    await asyncio.wait_for(passed, 1)
+    assert host.now() == pytest.approx(0.2)
+    host.hold(0.2)
+    assert clock.held == 0.2
+    host.hold(None)
+    clock.lose()
+    assert isinstance(await asyncio.wait_for(lost, 1), HardwareLost)
+    with pytest.raises(HardwareLost):
+        await host.engage()
+    await host.aclose()

@@ -12,6 +12,10 @@ import pytest
 
 import programs
 import robots.library as library
+import robots.testing as testing
+from mover import ExpectedFault
+from mover._programs import _expected
+from robots.hal import HardwareLost
 
 pytestmark = pytest.mark.processes
 
@@ -28,7 +32,8 @@ def test_every_public_name_exists_and_is_documented() -> None:
 
 
 def test_the_library_needs_neither_pymunk_nor_sim_hw() -> None:
-    code = "import sys, robots.library, programs; print(sorted(m for m in sys.modules if "
+    code = "import sys, robots.library, robots.testing, programs; print(sorted(m for m in "
+    code += "sys.modules if "
     code += "m.split('.')[0] in ('pymunk', 'sim_hw')))"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"
@@ -51,3 +56,15 @@ def test_the_programs_are_registered() -> None:
     assert {name: fn.__module__ for name, fn in found.items()} == {
         m: f"programs.{m}" for m in modules
     }
+
+
+def test_the_hal_fakes_are_documented() -> None:
+    assert testing.__doc__ and "fake_hardware" in testing.__doc__
+    for name in testing.__all__:
+        assert inspect.getdoc(getattr(testing, name)), f"robots.testing.{name} has no docstring"
+
+
+def test_a_lost_hardware_is_an_expected_fault_not_a_bug() -> None:
+    assert issubclass(HardwareLost, ExpectedFault)
+    assert _expected(HardwareLost("the world stopped")) and not _expected(KeyError("bug"))
+    assert not hasattr(HardwareLost, "expected")  # the mark is the class, not an attribute

@@ -4,9 +4,7 @@ with the in-process runner (the LEDs seen from above, the proximity ring's obsta
 
 from __future__ import annotations
 
-import contextlib
 import math
-from collections.abc import AsyncIterator, Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -34,46 +32,9 @@ from robots.stigmergic import (
     read_leds,
     show_leds,
 )
+from robots.testing import FakeClock
 
 TICK = 0.1
-
-
-class FakeClock:
-    """Simulated time that advances one tick per ``tick()``; ``on_tick`` runs after each."""
-
-    tick_period = TICK
-
-    def __init__(self) -> None:
-        self.ticks = 0
-        self.on_tick: list[Callable[[], None]] = []
-
-    def now(self) -> float:
-        return self.ticks * TICK
-
-    async def tick(self) -> None:
-        self.ticks += 1
-        for hook in self.on_tick:
-            hook()
-
-    async def sleep(self, dt: float) -> None:
-        end = self.now() + dt - 1e-9
-        await self.tick()
-        while self.now() < end:
-            await self.tick()
-
-    @contextlib.asynccontextmanager
-    async def ticking(self) -> AsyncIterator[None]:
-        yield
-
-    @contextlib.asynccontextmanager
-    async def idling(self) -> AsyncIterator[None]:
-        yield
-
-    def hold(self, t: float | None) -> None:
-        pass
-
-    async def passed(self, t: float) -> None:
-        pass
 
 
 @dataclass
