@@ -25,6 +25,7 @@ import statistics
 import sys
 import time
 from collections import deque
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -129,7 +130,8 @@ async def receive(name: str, mode: str) -> None:
                     pending[0] = True
                     loop.call_soon_threadsafe(drain)
 
-            sub = node.zenoh_session.declare_subscriber(FLOOD_KEY, on_sample)
+            raw = node.zenoh_session.declare_subscriber(FLOOD_KEY, on_sample)
+            close: Callable[[], object] = raw.undeclare
         else:
             sub = node.subscribe("flood", maxlen=10_000_000)
 
@@ -145,6 +147,7 @@ async def receive(name: str, mode: str) -> None:
                     last = now
 
             consumer = asyncio.create_task(consume())
+            close = sub.close
 
         def stats() -> list[float]:
             return [count, last - first]
@@ -154,7 +157,7 @@ async def receive(name: str, mode: str) -> None:
         await loop.run_in_executor(None, sys.stdin.read)
         if mode != "raw":
             consumer.cancel()
-        sub.undeclare() if mode == "raw" else sub.close()
+        close()
 
 
 # -- the coordinator --------------------------------------------------------------------------

@@ -23,13 +23,14 @@ import logging
 import time
 from collections import deque
 from collections.abc import Callable
-from typing import Any
+from typing import Any, TypeVar
 
 import zenoh
 
 log = logging.getLogger("mover.bridge")
 
 Handler = Callable[[Any], None]
+T = TypeVar("T")
 
 # Items drained per loop iteration before yielding to other tasks.
 _BATCH = 4096
@@ -37,8 +38,6 @@ LIMIT = 10_000
 """Items waiting for the loop past which broadcasts are dropped (twice that: everything)."""
 LIMIT_BYTES = 64 * 1024 * 1024
 """Payload bytes waiting for the loop past which broadcasts are dropped (twice: everything)."""
-
-Size = Callable[[Any], int]
 
 
 class Portal:
@@ -108,12 +107,12 @@ class Portal:
 
     def callback(
         self,
-        handler: Handler,
-        on_close: Handler | None = None,
+        handler: Callable[[T], None],
+        on_close: Callable[[None], None] | None = None,
         *,
         droppable: bool = False,
-        size: Size | None = None,
-    ) -> Any:
+        size: Callable[[T], int] | None = None,
+    ) -> zenoh.handlers.Callback[T]:
         """A zenoh callback handler that sends each item to ``handler`` on the loop.
 
         ``on_close`` (called on the loop with ``None``) runs when zenoh drops the callback: for a
@@ -123,7 +122,7 @@ class Portal:
         """
         send = self.send
 
-        def on_item(item: Any) -> None:
+        def on_item(item: T) -> None:
             send(handler, item, droppable, size(item) if size is not None else 0)
 
         if on_close is None:
@@ -172,7 +171,7 @@ async def run_blocking(fn: Callable[[], Any]) -> Any:
         thread.join(timeout=10)
 
 
-def sample_size(sample: Any) -> int:
+def sample_size(sample: zenoh.Sample | zenoh.Query) -> int:
     """A sample's or a query's payload size (for :meth:`Portal.callback`)."""
     payload = sample.payload
     return len(payload) if payload is not None else 0

@@ -172,7 +172,7 @@ class Membership:
         state = self._state
         return MemberInfo(state.name, state.kind, state.started, os.getpid(), os.uname().nodename)
 
-    def on_token(self, sample: Any) -> None:
+    def on_token(self, sample: zenoh.Sample) -> None:
         """A liveliness token appeared or went away (runs on the loop)."""
         key = str(sample.key_expr)
         name = _keys.robot_of(key)
@@ -250,7 +250,7 @@ class Membership:
         found: list[MemberInfo] = []
         finished: asyncio.Future[None] = loop.create_future()
 
-        def on_reply(reply: Any) -> None:
+        def on_reply(reply: zenoh.Reply) -> None:
             if reply.ok is None:
                 return
             try:
@@ -260,7 +260,7 @@ class Membership:
             if env.epoch != state.sealer.epoch:
                 found.append(info)
 
-        def on_done(_: Any) -> None:
+        def on_done(_: None) -> None:
             if not finished.done():
                 finished.set_result(None)
 
@@ -279,7 +279,7 @@ class Membership:
         challenge = os.urandom(16)
         answered = False
 
-        def on_reply(reply: Any) -> None:
+        def on_reply(reply: zenoh.Reply) -> None:
             nonlocal answered
             if reply.ok is None or answered:
                 return
@@ -295,7 +295,7 @@ class Membership:
             if join and name in self._tokens:
                 self._join(info)
 
-        def on_done(_: Any) -> None:
+        def on_done(_: None) -> None:
             if answered:
                 return
             if not join:
@@ -324,7 +324,7 @@ class Membership:
             timeout=state.config.hello_timeout,
         )
 
-    def on_hello_query(self, query: Any) -> None:
+    def on_hello_query(self, query: zenoh.Query) -> None:
         """Answer a hello request with a signed hello (runs on the loop)."""
         state = self._state
         with query:

@@ -16,7 +16,7 @@ import inspect
 import logging
 import time
 from collections.abc import Callable
-from typing import Any, Literal
+from typing import Any, Literal, Protocol
 
 import zenoh
 
@@ -31,6 +31,12 @@ from ._session import SessionState
 from ._wire import DEFAULT_MAX_SIZE, Opener, Sealer
 
 log = logging.getLogger("mover.node")
+
+
+class _Declared(Protocol):
+    """What the node declared on its session (queryables, subscribers, its token)."""
+
+    def undeclare(self) -> object: ...
 
 
 class Node:
@@ -85,7 +91,7 @@ class Node:
         self._server.export(self.procedures, "mover.procedures")
         self._client = RpcClient(self._state, self.membership)
         self._pubsub = PubSub(self._state, self.radio, self.membership)
-        self._declared: list[Any] = []
+        self._declared: list[_Declared] = []
 
     @property
     def team(self) -> Membership:
@@ -174,7 +180,7 @@ class Node:
         session = self._state.closed()
         await run_blocking(lambda: self._close_session(session))
 
-    def _close_session(self, session: Any) -> None:
+    def _close_session(self, session: zenoh.Session) -> None:
         for entity in reversed(self._declared):
             try:
                 entity.undeclare()
@@ -195,9 +201,9 @@ class Node:
         return self._state.connected()
 
     @property
-    def zenoh_session(self) -> Any:
-        """The underlying zenoh session (for tools and benchmarks)."""
-        return self._state.zenoh
+    def zenoh_session(self) -> zenoh.Session:
+        """The underlying zenoh session (for tools and benchmarks; the node is open)."""
+        return self._state.session()
 
     # -- procedures -----------------------------------------------------------------------------
 

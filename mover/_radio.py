@@ -246,8 +246,8 @@ class PubSub:
         self.state = state
         self.radio = radio
         self.team = team
-        self._subs: dict[str, tuple[Any, list[Subscription]]] = {}
-        self._publishers: dict[tuple[str, bool, bool], Any] = {}
+        self._subs: dict[str, tuple[zenoh.Subscriber[None], list[Subscription]]] = {}
+        self._publishers: dict[tuple[str, bool, bool], zenoh.Publisher] = {}
         self._outbox: dict[tuple[str, bool, bool], list[bytes]] = {}
         self._flush_scheduled = False
 
@@ -285,11 +285,11 @@ class PubSub:
                 state.stats["sent.bc_frames"] += 1
             state.stats["sent.bc"] += len(items)
 
-    def _publisher(self, topic: str, reliable: bool, express: bool) -> Any:
+    def _publisher(self, topic: str, reliable: bool, express: bool) -> zenoh.Publisher:
         pub = self._publishers.get((topic, reliable, express))
         if pub is None:
             congestion = zenoh.CongestionControl.BLOCK if reliable else zenoh.CongestionControl.DROP
-            pub = self.state.zenoh.declare_publisher(
+            pub = self.state.session().declare_publisher(
                 _keys.broadcast(self.state.team, topic),
                 congestion_control=congestion,
                 express=express,
@@ -303,7 +303,7 @@ class PubSub:
         sub = Subscription(topic, maxlen, self._unsubscribe)
         entry = self._subs.get(topic)
         if entry is None:
-            zsub = self.state.zenoh.declare_subscriber(
+            zsub = self.state.session().declare_subscriber(
                 _keys.broadcast(self.state.team, topic),
                 self.state.door().callback(self.on_frame, droppable=True, size=sample_size),
             )
@@ -322,7 +322,7 @@ class PubSub:
             if self.state.is_open:
                 entry[0].undeclare()
 
-    def on_frame(self, sample: Any) -> None:
+    def on_frame(self, sample: zenoh.Sample) -> None:
         """A broadcast frame arrived (on the loop)."""
         state = self.state
         try:

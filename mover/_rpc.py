@@ -13,10 +13,12 @@ from __future__ import annotations
 import asyncio
 import inspect
 import logging
-from collections.abc import Callable
+from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
 from functools import partial
 from typing import TYPE_CHECKING, Any, TypeVar
+
+import zenoh
 
 from . import _keys
 from ._exceptions import (
@@ -93,7 +95,7 @@ class RpcServer:
         _keys.check_name("procedure", name)
         self.exports[name] = Exported(name, fn, Signature(fn))
 
-    def on_query(self, query: Any) -> None:
+    def on_query(self, query: zenoh.Query) -> None:
         """An incoming call (runs on the loop)."""
         state = self.state
         frame = query.payload.to_bytes() if query.payload is not None else b""
@@ -140,7 +142,9 @@ class RpcServer:
 
         task.add_done_callback(done)
 
-    async def _serve(self, query: Any, env: Envelope, exported: Exported, awaitable: Any) -> None:
+    async def _serve(
+        self, query: zenoh.Query, env: Envelope, exported: Exported, awaitable: Awaitable[Any]
+    ) -> None:
         try:
             result = await awaitable
         except asyncio.CancelledError:
@@ -203,7 +207,7 @@ class RpcServer:
         )
         return _err(type(exc).__name__, str(exc))
 
-    def _send(self, query: Any, env: Envelope, reply: dict[str, Any]) -> None:
+    def _send(self, query: zenoh.Query, env: Envelope, reply: dict[str, Any]) -> None:
         state = self.state
         with query:
             try:
@@ -228,7 +232,7 @@ class RpcServer:
                 self._asked[(who, cid)] = True
                 task.cancel()
 
-    def on_ctl(self, sample: Any) -> None:
+    def on_ctl(self, sample: zenoh.Sample) -> None:
         """A control message (a caller's cancel) on ``mover/<team>/ctl/<me>`` (on the loop)."""
         state = self.state
         try:
@@ -360,7 +364,7 @@ class RpcClient:
     def _cancel_remote(self, robot: str, epoch: bytes, call_id: int) -> None:
         state = self.state
         try:
-            state.zenoh.put(
+            state.session().put(
                 _keys.ctl(state.team, robot),
                 state.sealer.seal("cancel", call_id, call_id, to=robot, to_epoch=epoch),
             )
@@ -368,7 +372,7 @@ class RpcClient:
         except Exception as exc:
             log.debug("could not send cancel to %r: %s", robot, exc)
 
-    def _on_reply(self, call_id: int, reply: Any) -> None:
+    def _on_reply(self, call_id: int, reply: zenoh.Reply) -> None:
         p = self.pending.get(call_id)
         if p is None or p.future.done():
             return
@@ -414,7 +418,7 @@ class RpcClient:
             return cls(message, robot=p.robot, procedure=p.procedure)
         return RemoteError(kind, message, robot=p.robot, procedure=p.procedure)
 
-    def _on_done(self, call_id: int, _: Any) -> None:
+    def _on_done(self, call_id: int, _: None) -> None:
         p = self.pending.get(call_id)
         if p is None or p.future.done():
             return

@@ -15,9 +15,10 @@ import time
 from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import Literal
 
 import zenoh
+from zenoh import Reply, Session
 
 from ._bridge import Portal
 from ._config import NodeConfig
@@ -71,7 +72,7 @@ class SessionState:
     peers: Sessions = field(default_factory=Sessions)
     stats: Counter[str] = field(default_factory=Counter)
     faults: FaultLog = field(init=False)
-    zenoh: Any = None  # the zenoh session while open
+    zenoh: Session | None = None  # the zenoh session while open
     portal: Portal | None = None  # the door into the loop while open
 
     def __post_init__(self) -> None:
@@ -82,13 +83,13 @@ class SessionState:
         """Whether the zenoh session is open."""
         return self.zenoh is not None
 
-    def opened(self, session: Any, portal: Portal) -> None:
+    def opened(self, session: Session, portal: Portal) -> None:
         """The node opened ``session``; items from zenoh's threads go through ``portal``."""
         self.zenoh, self.portal = session, portal
 
-    def closed(self) -> Any:
+    def closed(self) -> Session:
         """The node is closing: the session it must close (no part uses it any more)."""
-        session, self.zenoh = self.zenoh, None
+        session, self.zenoh = self.session(), None
         if self.portal is not None:
             self.portal.close()
         return session
@@ -97,6 +98,12 @@ class SessionState:
         """Raise MoverError unless the node is open."""
         if self.zenoh is None:
             raise MoverError("the node is not open (use 'async with Node(...)')")
+
+    def session(self) -> Session:
+        """The zenoh session (the node is open)."""
+        if self.zenoh is None:
+            raise MoverError("the node is not open (use 'async with Node(...)')")
+        return self.zenoh
 
     def door(self) -> Portal:
         """The portal (the node is open)."""
@@ -108,8 +115,8 @@ class SessionState:
         self,
         key: str,
         payload: bytes | bytearray,
-        on_reply: Callable[[Any], None],
-        on_done: Callable[[Any], None],
+        on_reply: Callable[[Reply], None],
+        on_done: Callable[[None], None],
         *,
         timeout: float,
         express: bool = False,
@@ -117,7 +124,7 @@ class SessionState:
         """A zenoh get to every queryable on ``key`` (so that a stranger's queryable, complete
         or not, cannot take the query away from the member), every reply handed to
         ``on_reply`` on the loop, then ``on_done(None)`` when the query is finished."""
-        self.zenoh.get(
+        self.session().get(
             key,
             self.door().callback(on_reply, on_done),
             payload=payload,

@@ -16,25 +16,13 @@ mover's range-limited broadcast.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from contextlib import AbstractAsyncContextManager
-from typing import TYPE_CHECKING, Any, Protocol, TypeVar, runtime_checkable
+from typing import Any, Protocol, TypeVar, runtime_checkable
+
+from mover import IdleClock, Node
 
 from .hal import RadioLocator
 
-if TYPE_CHECKING:
-    from mover import Node
-
 __all__ = ["BaseHardware", "HardwareBackend", "check_options"]
-
-
-class _Idles(Protocol):
-    def now(self) -> float: ...
-
-    async def passed(self, t: float) -> None: ...
-
-    def hold(self, t: float | None) -> None: ...
-
-    def idling(self) -> AbstractAsyncContextManager[None]: ...
 
 
 class _Stops(Protocol):
@@ -44,13 +32,14 @@ class _Stops(Protocol):
 class BaseHardware(Protocol):
     """What the robot process touches on any hardware (continuous or grid).
 
-    ``clock.idling()`` keeps the robot idle while no run drives it, ``clock.now()`` and
-    ``clock.passed(t)`` make the host's run clock (see ``robots.hal.Clock``); ``drive.stop()``
+    ``clock.idling()`` keeps the robot idle while no run drives it, ``clock.now()``,
+    ``clock.passed(t)`` and ``clock.hold(t)`` make the host's run clock (a
+    :class:`mover.IdleClock`, which both HALs' clocks extend); ``drive.stop()``
     stops the motors; ``radio`` is the transport's ground-truth locator.
     """
 
     @property
-    def clock(self) -> _Idles:
+    def clock(self) -> IdleClock:
         """The hardware's clock, idle while no run drives it."""
         ...
 

@@ -24,6 +24,8 @@ from contextlib import AbstractAsyncContextManager
 from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
+from mover import IdleClock
+
 __all__ = [
     "FREE",
     "OBSTACLE",
@@ -113,8 +115,12 @@ class Seen:
 
 
 @runtime_checkable
-class RoundClock(Protocol):
-    """Rounds of a lock-step grid world: one action per robot per round."""
+class RoundClock(IdleClock, Protocol):
+    """Rounds of a lock-step grid world: one action per robot per round.
+
+    A :class:`mover.IdleClock` whose times are rounds: ``hold(t)`` and ``passed(t)`` take a
+    round, and an idle robot stays where it is.
+    """
 
     def now(self) -> int:
         """The round the current perception belongs to."""
@@ -136,20 +142,6 @@ class RoundClock(Protocol):
         Members that agree on ``at`` start on the same world round. Raises RuntimeError if
         round ``at`` has already passed.
         """
-        ...
-
-    def idling(self) -> AbstractAsyncContextManager[None]:
-        """Be idle for the block: the robot stays, and a lock-step world neither waits for its
-        actions nor holds a round for it (see ``robots.hal.Clock.idling``)."""
-        ...
-
-    def hold(self, t: float | None) -> None:
-        """Hand in no action after round ``t`` until ``hold(None)`` (``robots.hal.Clock.hold``)."""
-        ...
-
-    async def passed(self, t: float) -> None:
-        """Return once this robot has handed in an action in round ``t`` or a later one;
-        HardwareLost if the hardware goes away meanwhile (see ``robots.hal.Clock.passed``)."""
         ...
 
 

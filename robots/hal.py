@@ -22,7 +22,7 @@ from contextlib import AbstractAsyncContextManager
 from dataclasses import dataclass
 from typing import Literal, Protocol, runtime_checkable
 
-from mover import ExpectedFault
+from mover import ExpectedFault, IdleClock
 
 __all__ = [
     "MARK",
@@ -214,15 +214,17 @@ class PushSense(Protocol):
 
 
 @runtime_checkable
-class Clock(Protocol):
-    """The hardware's clock: simulated time in simulation."""
+class Clock(IdleClock, Protocol):
+    """The hardware's clock: simulated time in simulation, in seconds.
+
+    ``now``, ``passed``, ``hold`` and ``idling`` are :class:`mover.IdleClock`'s. While idle the
+    readings stay current where the world sends them; ``tick()`` raises RuntimeError, and
+    ``await passed(math.inf)`` waits until the hardware is lost (HardwareLost). A real-time
+    world ticks on its own.
+    """
 
     tick_period: float
     """Seconds of hardware time between control ticks."""
-
-    def now(self) -> float:
-        """Hardware time in seconds."""
-        ...
 
     async def tick(self) -> None:
         """Send this tick's commands and wait for the next tick's readings."""
@@ -240,29 +242,6 @@ class Clock(Protocol):
         idle each tick; a robot waiting on its team must keep ticking. On hardware with its
         own clock this does nothing.
         """
-        ...
-
-    def idling(self) -> AbstractAsyncContextManager[None]:
-        """Be idle for the block: the drive is stopped, and a lock-step world neither waits
-        for this robot's commands nor advances a tick for it (a world whose robots are all idle
-        holds still). The readings stay current where the world sends them.
-
-        Entering and leaving are acknowledged by the world: once the block is left, the world
-        waits for this robot's command again, from the tick of the readings then. No ticks
-        inside the block (``tick()`` raises RuntimeError); ``await passed(math.inf)`` in it
-        waits until the hardware is lost (HardwareLost). A real-time world ticks on its own.
-        """
-        ...
-
-    def hold(self, t: float | None) -> None:
-        """Hand in no command on readings later than ``t`` until ``hold(None)``: a tick waits
-        meanwhile (a collective in simulated time holds a robot until it is decided)."""
-        ...
-
-    async def passed(self, t: float) -> None:
-        """Return once this robot has gone on past time ``t``: handed in a command on readings
-        of time ``t`` or later (at once if it has); raise HardwareLost if the hardware goes away
-        meanwhile. A robot whose program stopped at ``t`` hands in nothing there."""
         ...
 
 

@@ -17,15 +17,17 @@ from __future__ import annotations
 import argparse
 import asyncio
 import logging
-from collections.abc import Callable
-from typing import Any
+from collections.abc import Callable, Mapping
+from typing import Any, TypeVar
 
-from mover import MoverError
+from mover import MoverError, Node, NodeConfig, Team
 from mover.cli import bounded, member_name, positive
 from sim_hw._frames import read_command, readings_frame, topics
-from sim_hw._lockstep import LockstepDoor, RobotDropped
+from sim_hw._lockstep import Command, LockstepDoor, RobotDropped
 
 log = logging.getLogger("sim_hw.process")
+
+D = TypeVar("D", bound=LockstepDoor[Any])
 
 COMMAND_QUEUE = 10_000
 """Command frames a world keeps unread at most."""
@@ -80,7 +82,7 @@ def add_world_arguments(
     )
 
 
-def ready_line(name: str, source: str, team: Any, config: Any) -> str:
+def ready_line(name: str, source: str, team: Team, config: NodeConfig) -> str:
     """What a world process prints once it serves: where it is and how robots join it."""
     # A listen endpoint on port 0 has a free port that zenoh does not tell: name the endpoints
     # this process connects to instead (the router, say), which reach it as well.
@@ -93,7 +95,7 @@ def ready_line(name: str, source: str, team: Any, config: Any) -> str:
     )
 
 
-def serve(node: Any, door: LockstepDoor[Any], *, frames: bool = True) -> None:
+def serve(node: Node, door: LockstepDoor[Any], *, frames: bool = True) -> None:
     """Export ``door``'s calls on ``node`` and drop the robots whose process left.
 
     From now on liveness decides drops (``door.drop_silent`` is turned off: a silent robot
@@ -137,7 +139,7 @@ def serve(node: Any, door: LockstepDoor[Any], *, frames: bool = True) -> None:
 class _TickFrames:
     """The world's end of the tick frames: commands in, one frame of readings out per tick."""
 
-    def __init__(self, node: Any, door: LockstepDoor[Any]) -> None:
+    def __init__(self, node: Node, door: LockstepDoor[Any]) -> None:
         self.node, self.door = node, door
         commands, self.topic = topics(node.name)
         self.pending: dict[str, int] = {}  # robot -> the tick it waits on by frame
@@ -168,7 +170,7 @@ class _TickFrames:
             del self.pending[robot]
             self.send({robot: done})
 
-    def flush(self, commands: Any) -> None:
+    def flush(self, commands: Mapping[str, Command]) -> None:
         """The tick is done: one frame with the readings of every robot that asked by frame,
         and of every idle robot (so that their readings stay current)."""
         idle = self.door.idle_robots
@@ -190,20 +192,18 @@ class _TickFrames:
 
 
 async def run_world_process(
-    door: LockstepDoor[Any],
-    export: Callable[[Any, Any], None],
+    door: D,
+    export: Callable[[Node, D], None],
     *,
     name: str,
-    team: Any,
-    config: Any,
+    team: Team,
+    config: NodeConfig,
     until_tick: int | None = None,
     quit_when_empty: bool = False,
     ready: Callable[[], None] | None = None,
 ) -> None:
     """Open a node named ``name``, ``export(node, door)``, and run until the world reaches
     tick ``until_tick``, until every robot has left (``quit_when_empty``), or until cancelled."""
-    from mover import Node
-
     async with Node(name, team=team, kind="world", config=config, unique=True) as node:
         export(node, door)
         log.info("world serving as %r", name)

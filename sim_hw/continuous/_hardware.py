@@ -14,7 +14,7 @@ import asyncio
 import contextlib
 import math
 from collections.abc import AsyncIterator, Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from robots.hal import (
     BumperSide,
@@ -29,6 +29,11 @@ from sim_hw._ticks import Ticks
 
 from ._contract import Command, Readings
 from ._world import TICK
+
+if TYPE_CHECKING:
+    from mover import Node
+
+    from ._stepper import WorldServer
 
 PUSH_SPEED = 0.2
 """Forward speed (m/s) a push test asks for; the force bound decides whether it is reached."""
@@ -287,14 +292,16 @@ class _Push:
         self.push = hw.push
 
 
-async def in_process(server: Any, robot_id: str, spec: Mapping[str, Any] | None = None) -> Hardware:
+async def in_process(
+    server: WorldServer, robot_id: str, spec: Mapping[str, Any] | None = None
+) -> Hardware:
     """Join ``server`` (a :class:`WorldServer` in this process) and return the robot's HAL."""
     joined, link = await _link.in_process(server, robot_id, spec)
     return SimHardware(robot_id, joined["spec"], joined["readings"], link).hardware()
 
 
 async def remote(
-    node: Any,
+    node: Node,
     robot_id: str,
     spec: Mapping[str, Any] | None = None,
     *,

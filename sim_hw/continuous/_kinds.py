@@ -11,7 +11,7 @@ the other; the world refuses a join of the wrong kind (``_skyworld``).
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from mover import RemoteError
 from robots.hal import Sonar
@@ -21,6 +21,11 @@ from sim_hw import _link
 from ._contract import Command
 from ._hardware import SimHardware, _Clock, _Drive, _Led, _Odometry, _Radio, _Sonar
 from ._skyworld import EYEBOT, FOOTBOT
+
+if TYPE_CHECKING:
+    from mover import Node
+
+    from ._stepper import WorldServer
 
 
 class _Kind(SimHardware):
@@ -141,7 +146,7 @@ def _kind_of(joined: Mapping[str, Any], robot_id: str, kind: str) -> None:
         raise ValueError(f"{robot_id!r} joined as a {got or 'plain robot'}, not as a {kind}")
 
 
-async def eyebot_in_process(server: Any, robot_id: str) -> EyeBotHardware:
+async def eyebot_in_process(server: WorldServer, robot_id: str) -> EyeBotHardware:
     """Join ``server`` (a ``WorldServer`` in this process) as the eye-bot ``robot_id``."""
     joined, link = await _link.in_process(server, robot_id, {"kind": EYEBOT})
     _kind_of(joined, robot_id, EYEBOT)
@@ -149,7 +154,7 @@ async def eyebot_in_process(server: Any, robot_id: str) -> EyeBotHardware:
 
 
 async def footbot_in_process(
-    server: Any, robot_id: str, spec: Mapping[str, Any] | None = None
+    server: WorldServer, robot_id: str, spec: Mapping[str, Any] | None = None
 ) -> FootBotHardware:
     """Join ``server`` (a ``WorldServer`` in this process) as the foot-bot ``robot_id``."""
     joined, link = await _link.in_process(server, robot_id, {**(spec or {}), "kind": FOOTBOT})
@@ -158,7 +163,7 @@ async def footbot_in_process(
 
 
 async def join_remote(
-    node: Any,
+    node: Node,
     robot_id: str,
     kind: str,
     spec: Mapping[str, Any] | None = None,

@@ -17,6 +17,7 @@ from collections.abc import Awaitable, Callable, Collection, Mapping
 from dataclasses import asdict
 from typing import Any
 
+from mover import Node
 from sim_hw._lockstep import Command, LockstepDoor, Readings
 from sim_hw._process import STATE_TOPIC, serve
 
@@ -145,7 +146,7 @@ async def _quietly(awaitable: Awaitable[Any]) -> None:
         log.debug("snapshot hook failed: %s", exc)
 
 
-def serve_world(node: Any, server: WorldServer, *, state_topic: str = STATE_TOPIC) -> None:
+def serve_world(node: Node, server: WorldServer, *, state_topic: str = STATE_TOPIC) -> None:
     """Export ``server``'s three calls on ``node`` and send its snapshots to ``state_topic``."""
     serve(node, server)
     if server.on_snapshot is None and server.snapshot_every:

@@ -17,12 +17,17 @@ import asyncio
 import contextlib
 import contextvars
 from collections.abc import AsyncIterator, Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from robots.grid_hal import OFFSETS, GridHardware, Here, Near, Seen
 from sim_hw import _link
 from sim_hw._link import WorldLink
 from sim_hw._ticks import Ticks
+
+if TYPE_CHECKING:
+    from mover import Node
+
+    from ._server import GridServer
 
 _OWNER: contextvars.ContextVar[object | None] = contextvars.ContextVar("grid_owner", default=None)
 
@@ -247,28 +252,64 @@ class GridRobot:
         """The HAL bundle for robot code."""
         return GridHardware(
             id=self.id,
-            clock=_View(self, "now", "ended", "tick", "owned", "idling", "passed"),  # type: ignore[arg-type]
-            drive=_View(self, "move", "stop", "moved"),  # type: ignore[arg-type]
-            odometry=_View(self, "pose"),  # type: ignore[arg-type]
-            senses=_View(self, "here", "around", "rays", "compass"),  # type: ignore[arg-type]
-            floor=_View(self, "read", "write", "scent"),  # type: ignore[arg-type]
-            gripper=_View(self, "carried", "pick", "drop"),  # type: ignore[arg-type]
-            radio=_View(self, "position", "in_range", range=self.range),  # type: ignore[arg-type]
+            clock=_Clock(self),
+            drive=_Drive(self),
+            odometry=_Odometry(self),
+            senses=_Senses(self),
+            floor=_Floor(self),
+            gripper=_Gripper(self),
+            radio=_Radio(self),
         )
 
 
-class _View:
-    """A device: a few of the robot's methods, so each protocol exposes only its own."""
+# Thin device views, so that each HAL protocol exposes only its own methods.
 
-    def __init__(self, robot: GridRobot, *names: str, **values: Any) -> None:
-        for name in names:
-            setattr(self, name, getattr(robot, name))
-        for name, value in values.items():
-            setattr(self, name, value)
+
+class _Clock:
+    def __init__(self, robot: GridRobot) -> None:
+        self.now, self.ended, self.tick = robot.now, robot.ended, robot.tick
+        self.owned, self.idling = robot.owned, robot.idling
+        self.hold, self.passed = robot.hold, robot.passed
+
+
+class _Drive:
+    def __init__(self, robot: GridRobot) -> None:
+        self.move, self.stop, self.moved = robot.move, robot.stop, robot.moved
+
+
+class _Odometry:
+    def __init__(self, robot: GridRobot) -> None:
+        self.pose = robot.pose
+
+
+class _Senses:
+    def __init__(self, robot: GridRobot) -> None:
+        self.here, self.around = robot.here, robot.around
+        self.rays, self.compass = robot.rays, robot.compass
+
+
+class _Floor:
+    def __init__(self, robot: GridRobot) -> None:
+        self.read, self.write, self.scent = robot.read, robot.write, robot.scent
+
+
+class _Gripper:
+    def __init__(self, robot: GridRobot) -> None:
+        self.carried, self.pick, self.drop = robot.carried, robot.pick, robot.drop
+
+
+class _Radio:
+    def __init__(self, robot: GridRobot) -> None:
+        self.range = robot.range
+        self.position, self.in_range = robot.position, robot.in_range
 
 
 async def in_process(
-    server: Any, robot_id: str, spec: Mapping[str, Any] | None = None, *, idle_period: float = 0.0
+    server: GridServer,
+    robot_id: str,
+    spec: Mapping[str, Any] | None = None,
+    *,
+    idle_period: float = 0.0,
 ) -> GridHardware:
     """Join ``server`` (a :class:`~sim_hw.grid.GridServer` in this process)."""
     joined, link = await _link.in_process(server, robot_id, spec)
@@ -278,7 +319,7 @@ async def in_process(
 
 
 async def connect(
-    node: Any,
+    node: Node,
     robot_id: str,
     spec: Mapping[str, Any] | None = None,
     *,

@@ -103,7 +103,8 @@ async def test_the_demo_fails_fast_with_the_worlds_error_when_it_rejects_its_fil
     code, out = await run_demo(tmp_path, "--world", str(bad))
     assert time.monotonic() - t0 < 5, out
     assert code == 2, out
-    assert f"mover demo: world file {bad}: world.size: must be at most" in out
+    assert f"mover demo: world file {bad}:3: world.size: must be a list of 2 numbers" in out
+    assert "each > 0 and at most 1000, got [10000000.0, 10000000.0]" in out
     assert "Traceback" not in out
 
 
