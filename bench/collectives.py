@@ -25,7 +25,8 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from mover import Node, NodeConfig, Team, free_port, launch
+from mover import Node, NodeConfig, TeamCredentials, launch
+from mover._config import free_port
 
 MEMBER = str(Path(__file__).with_name("_member.py"))
 
@@ -35,7 +36,7 @@ def pct(values: list[float], q: int) -> float:
 
 
 async def measure(n: int, rounds: int, seed: int) -> dict[str, float]:
-    team = Team.generate("bench")
+    team = TeamCredentials.generate("bench")
     port = free_port()
     env = {**os.environ, **team.env(), **NodeConfig(connect=(f"tcp/127.0.0.1:{port}",)).env()}
     names = [f"m{i:02d}" for i in range(n)]
@@ -62,7 +63,7 @@ async def measure(n: int, rounds: int, seed: int) -> dict[str, float]:
             for p in procs:
                 assert p.stdout is not None
                 await asyncio.wait_for(p.stdout.readline(), 60)
-            await node.team.wait_for(names, timeout=60)
+            await node.membership.wait_for(names, timeout=60)
             await asyncio.sleep(1.0)
             or_runs = await launch(node, "bench_or", names, {"rounds": rounds}, run=f"or{n}")
             raw_runs = await launch(node, "bench_raw_or", names, {"rounds": rounds}, run=f"raw{n}")

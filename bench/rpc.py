@@ -33,7 +33,8 @@ import zenoh
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from mover import FixedLocator, Node, NodeConfig, Team, free_port
+from mover import FixedLocator, Node, NodeConfig, TeamCredentials
+from mover._config import free_port
 
 RAW_KEY = "bench/raw/echo"
 LOOP_KEY = "bench/raw/loop"
@@ -45,7 +46,7 @@ FLOOD_KEY = "bench/raw/flood"
 
 async def serve() -> None:
     """The callee: a raw queryable and a mover node on the same zenoh session."""
-    async with Node("server", Team.from_env(), config=NodeConfig.from_env()) as node:
+    async with Node("server", TeamCredentials.from_env(), config=NodeConfig.from_env()) as node:
 
         def raw(query: Any) -> None:
             with query:
@@ -105,7 +106,10 @@ async def receive(name: str, mode: str) -> None:
     count = 0
     first = last = 0.0
     async with Node(
-        name, Team.from_env(), config=NodeConfig.from_env(), locator=FixedLocator(1.0, 0.0)
+        name,
+        TeamCredentials.from_env(),
+        config=NodeConfig.from_env(),
+        locator=FixedLocator(1.0, 0.0),
     ) as node:
         if mode == "raw":
             items: deque[Any] = deque()
@@ -244,7 +248,7 @@ async def measure_flood(
         )
     )
     try:
-        await node.team.wait_for({f"rx{i}" for i in range(receivers)}, timeout=30)
+        await node.membership.wait_for({f"rx{i}" for i in range(receivers)}, timeout=30)
         await asyncio.sleep(1.0)  # subscriptions propagate
         payload = os.urandom(64)
         sent = 0
@@ -276,7 +280,7 @@ async def measure_flood(
 
 
 async def coordinate(args: argparse.Namespace) -> None:
-    team = Team.generate("bench")
+    team = TeamCredentials.generate("bench")
     port = free_port()
     env = dict(os.environ)
     env.update(team.env())
@@ -289,7 +293,7 @@ async def coordinate(args: argparse.Namespace) -> None:
     ) as node:
         server = await spawn(["--role", "serve"], env)
         try:
-            await node.team.wait_for({"server"}, timeout=30)
+            await node.membership.wait_for({"server"}, timeout=30)
             rpc = await measure_rpc(node, args.rounds)
         finally:
             await stop([server])

@@ -40,7 +40,8 @@ from typing import Any
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from mover import Node, NodeConfig, Team, free_port  # noqa: E402
+from mover import Node, NodeConfig, TeamCredentials  # noqa: E402
+from mover._config import free_port  # noqa: E402
 from mover._up import needs_router  # noqa: E402  # the topology rule of `mover up`
 from sim_hw import World, WorldServer, WorldSpec, in_process  # noqa: E402
 from sim_hw._process import serve  # noqa: E402
@@ -96,7 +97,7 @@ async def world_alone(n: int, seconds: float) -> float:
 async def processes(n: int, seconds: float, *, frames: bool = True, router: bool) -> float:
     """Real-time factor of n walker processes on the remote HAL (``router``: every process,
     the world's included, a client of one router process; else a peer mesh)."""
-    team, port = Team.generate("bench"), free_port()
+    team, port = TeamCredentials.generate("bench"), free_port()
     endpoint = f"tcp/127.0.0.1:{port}"
     timer = _Timer()
     server = WorldServer(World(_arena(n), seed=1), expect=n, on_tick=timer, timeout=10.0)
@@ -126,7 +127,7 @@ async def _walk(
     n: int,
     ticks: int,
     frames: bool,
-    team: Team,
+    team: TeamCredentials,
     config: NodeConfig,
     env: dict[str, str],
     server: WorldServer,

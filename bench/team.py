@@ -42,7 +42,8 @@ from typing import Any
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from mover import CallError, Node, NodeConfig, Team, free_port  # noqa: E402
+from mover import CallError, Node, NodeConfig, TeamCredentials  # noqa: E402
+from mover._config import free_port  # noqa: E402
 from mover._up import needs_router  # noqa: E402  # the topology rule `mover up` uses
 
 TICK = os.sysconf("SC_CLK_TCK")
@@ -57,13 +58,15 @@ async def member(name: str, size: int) -> None:
     names = [f"m{i:03d}" for i in range(size)]
     others = [n for n in names if n != name]
     rng = random.Random(name)
-    async with Node(name, Team.from_env(), kind="bench", config=NodeConfig.from_env()) as node:
+    async with Node(
+        name, TeamCredentials.from_env(), kind="bench", config=NodeConfig.from_env()
+    ) as node:
         node.export(lambda data: data, "echo")
-        await node.team.wait_for(names, timeout=60 + 2 * size)
+        await node.membership.wait_for(names, timeout=60 + 2 * size)
         left: list[tuple[str, float]] = []  # who, and when (CLOCK_MONOTONIC, machine-wide)
 
         async def watch() -> None:
-            async for event in node.team.events():
+            async for event in node.membership.events():
                 if event.kind == "leave":
                     left.append((event.name, time.monotonic()))
 
@@ -127,7 +130,7 @@ class Processes:
         return [p.pid for p in procs]
 
     async def start(self) -> None:
-        team, port = Team.generate("bench"), free_port()
+        team, port = TeamCredentials.generate("bench"), free_port()
         seed = f"tcp/127.0.0.1:{port}"
         base = {**self.env, **team.env()}
         if self.router:

@@ -92,9 +92,6 @@ class TeamCredentials:
         return {"MOVER_TEAM": self.name, "MOVER_TEAM_KEY": self.key.hex()}
 
 
-Team = TeamCredentials  # the name before; mover.Team is deprecated (mover/__init__.py)
-
-
 @dataclass(frozen=True)
 class NodeConfig:
     """Zenoh settings and membership timeouts for one node.

@@ -22,7 +22,7 @@ import zenoh
 
 from . import _deprecated, _keys
 from ._bridge import Portal, run_blocking, sample_size
-from ._config import NodeConfig, Team
+from ._config import NodeConfig, TeamCredentials
 from ._exceptions import MoverError, NameTaken
 from ._membership import Membership
 from ._radio import Locator, Message, Neighbour, PubSub, Radio, RadioModel, Subscription
@@ -51,7 +51,7 @@ class Node:
     def __init__(
         self,
         name: str,
-        team: Team,
+        team: TeamCredentials,
         *,
         kind: str = "robot",
         config: NodeConfig | None = None,

@@ -19,7 +19,7 @@ A host runs one run at a time: a second is refused (``Refused``, naming the run 
 unless both were started with ``share=True``. A run starts, once its members are seen and the
 hardware is ready, by engaging the host's clock (``ProgramHost.clock``, a
 :class:`~mover.RunClock`, if the hardware has one: a lock-step world then waits for this robot)
-and passing the team's begin barrier (:meth:`~mover.TaskTeam.begin`: every member starts on
+and passing the team's begin barrier (:meth:`~mover.RunTeam.begin`: every member starts on
 the same tick); the clock is released when the last run here ends, however it ends.
 """
 
@@ -230,7 +230,7 @@ class ProgramHost:
     ) -> Any:
         try:
             # Every member starts from the same view of the team (the designated members).
-            await self.node.team.wait_for(members, timeout=self.join_timeout)
+            await self.node.membership.wait_for(members, timeout=self.join_timeout)
             async with asyncio.timeout(self.join_timeout):
                 await self.ready.wait()
             team.clock = await self._engage()

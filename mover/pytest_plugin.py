@@ -51,7 +51,7 @@ from typing import Any
 import pytest
 import pytest_asyncio
 
-from ._config import NodeConfig, Team
+from ._config import NodeConfig, TeamCredentials
 from ._futures import failure
 from ._node import Node
 from ._procs import Child
@@ -71,14 +71,14 @@ _CALL_FAILED = pytest.StashKey[bool]()
 
 
 @pytest.fixture
-def mover_team() -> Team:
+def mover_team() -> TeamCredentials:
     """A fresh team: its own name and key."""
-    return Team.generate(f"test-{secrets.token_hex(3)}")
+    return TeamCredentials.generate(f"test-{secrets.token_hex(3)}")
 
 
 @pytest_asyncio.fixture
 async def mover_cluster(
-    request: pytest.FixtureRequest, mover_team: Team, tmp_path: Path
+    request: pytest.FixtureRequest, mover_team: TeamCredentials, tmp_path: Path
 ) -> AsyncIterator[Cluster]:
     """The test's processes: started in the test file's directory, logging to files, all
     killed at the end; one that exits on its own while the test runs fails the test."""
@@ -194,16 +194,18 @@ async def mover_up(request: pytest.FixtureRequest, tmp_path: Path) -> AsyncItera
         name, endpoint = ready.group(1), ready.group(2)
         router = any("router on" in line for line in lines)
         config = NodeConfig(mode="client" if router else "peer", connect=(endpoint,))
-        node = Node(f"test-{secrets.token_hex(2)}", Team(name, key), kind="tool", config=config)
+        node = Node(
+            f"test-{secrets.token_hex(2)}", TeamCredentials(name, key), kind="tool", config=config
+        )
         await node.__aenter__()
         started.append((child, node))
         # ready by membership here too: every process mover up started (a log each; the
         # router is no member) is seen by the test's node before the test goes on
         names = [p.stem for p in out.glob("*.log") if p.stem != "router"]
         try:
-            await node.team.wait_for(names, timeout=READY_TIMEOUT)
+            await node.membership.wait_for(names, timeout=READY_TIMEOUT)
         except TimeoutError:
-            missing = [n for n in names if n not in node.team]
+            missing = [n for n in names if n not in node.membership]
             pytest.fail(f"{', '.join(missing)} of {team_file} not seen within {READY_TIMEOUT:g} s")
         return UpTeam(node, out, lines, proc)
 
@@ -217,7 +219,7 @@ async def mover_up(request: pytest.FixtureRequest, tmp_path: Path) -> AsyncItera
 
 async def _ready(c: Cluster, node: Node, names: Sequence[str]) -> None:
     """Wait until ``names`` are members; fail at once if one of the processes exits first."""
-    waiting = asyncio.ensure_future(node.team.wait_for(list(names), timeout=READY_TIMEOUT))
+    waiting = asyncio.ensure_future(node.membership.wait_for(list(names), timeout=READY_TIMEOUT))
     died = asyncio.ensure_future(c.first_exit())
     try:
         done, _ = await asyncio.wait({waiting, died}, return_when=asyncio.FIRST_COMPLETED)
@@ -231,7 +233,7 @@ async def _ready(c: Cluster, node: Node, names: Sequence[str]) -> None:
         why = f"{exit_.brief} before {', '.join(names)} were ready:\n{exit_.tail}"
         pytest.fail(why, pytrace=False)
     if waiting in done and failure(waiting) is not None:
-        missing = [n for n in names if n not in node.team]
+        missing = [n for n in names if n not in node.membership]
         pytest.fail(
             f"{', '.join(missing)} did not become members within {READY_TIMEOUT:g} s",
             pytrace=False,

@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ._config import NodeConfig, Team, free_port
+from ._config import NodeConfig, TeamCredentials, free_port
 from ._node import Node
 from ._procs import Child, ProcessExited, start, stop
 from ._programs import ProgramHost
@@ -44,7 +44,7 @@ class Cluster:
     With ``logs``, every process's standard error goes to ``<logs>/<label>.log``.
     """
 
-    team: Team
+    team: TeamCredentials
     port: int = field(default_factory=free_port)
     procs: list[asyncio.subprocess.Process] = field(default_factory=list)
     cwd: Path = field(default_factory=Path.cwd)
@@ -78,7 +78,7 @@ class Cluster:
         self,
         module: str,
         *args: str,
-        team: Team | None = None,
+        team: TeamCredentials | None = None,
         ready: str | None = "READY",
         timeout: float = 30.0,
         config: NodeConfig | None = None,
@@ -189,9 +189,9 @@ def _file_name(label: str) -> str:
 
 
 @asynccontextmanager
-async def cluster(team: Team | None = None, **kwargs: object) -> AsyncIterator[Cluster]:
+async def cluster(team: TeamCredentials | None = None, **kwargs: object) -> AsyncIterator[Cluster]:
     """A cluster whose processes are all killed on exit."""
-    c = Cluster(team or Team.generate("alpha"), **kwargs)  # type: ignore[arg-type]
+    c = Cluster(team or TeamCredentials.generate("alpha"), **kwargs)  # type: ignore[arg-type]
     try:
         yield c
     finally:
@@ -210,8 +210,10 @@ async def serve_programs(
         if __name__ == "__main__":
             asyncio.run(serve_programs(sys.argv[1], {"my_program": my_program}))
     """
-    async with Node(name, Team.from_env(), config=NodeConfig.from_env(), unique=True) as node:
+    async with Node(
+        name, TeamCredentials.from_env(), config=NodeConfig.from_env(), unique=True
+    ) as node:
         ProgramHost(node, programs, robot=None)
-        await node.team.wait_for({name}, timeout=timeout)
+        await node.membership.wait_for({name}, timeout=timeout)
         print("READY", flush=True)
         await asyncio.get_running_loop().run_in_executor(None, sys.stdin.read)

@@ -26,7 +26,7 @@ from collections.abc import AsyncIterator, Callable, Mapping
 from importlib.metadata import EntryPoint, entry_points
 from typing import Any
 
-from mover import Node, NodeConfig, ProgramHost, RunClock, Team
+from mover import Node, NodeConfig, ProgramHost, RunClock, TeamCredentials
 from mover._futures import failure
 
 from ._robot import Robot
@@ -86,7 +86,7 @@ def installed_programs() -> dict[str, Callable[..., Any]]:
 async def run_robot(
     name: str,
     *,
-    team: Team,
+    team: TeamCredentials,
     config: NodeConfig,
     kind: str = "robot",
     hardware: str = "sim",

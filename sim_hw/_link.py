@@ -119,9 +119,9 @@ def world_caller(node: Node, world: str, call_timeout: float) -> Callable[..., A
     async def call(procedure: str, *args: Any) -> Any:
         vanished: float | None = None  # when the world first failed a call by leaving
         while True:
-            if world not in node.team:
+            if world not in node.membership:
                 try:
-                    await node.team.wait_for([world], timeout=WORLD_GRACE)
+                    await node.membership.wait_for([world], timeout=WORLD_GRACE)
                 except TimeoutError:
                     raise lost() from None
             try:
@@ -193,7 +193,7 @@ class _RemoteLink:
     async def _watch_world(self) -> None:
         """Raise WorldLost once the world stays gone; after it was away, ask whether it still
         has our body (a world that dropped us, or restarted, says RobotDropped)."""
-        team = self.node.team
+        team = self.node.membership
         while True:
             await _gone(team, self.world)
             try:

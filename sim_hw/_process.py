@@ -20,7 +20,7 @@ import logging
 from collections.abc import Callable, Mapping
 from typing import Any, TypeVar
 
-from mover import MoverError, Node, NodeConfig, Team
+from mover import MoverError, Node, NodeConfig, TeamCredentials
 from mover.cli import bounded, member_name, positive
 from sim_hw._frames import read_command, readings_frame, topics
 from sim_hw._lockstep import Command, LockstepDoor, RobotDropped
@@ -82,7 +82,7 @@ def add_world_arguments(
     )
 
 
-def ready_line(name: str, source: str, team: Team, config: NodeConfig) -> str:
+def ready_line(name: str, source: str, team: TeamCredentials, config: NodeConfig) -> str:
     """What a world process prints once it serves: where it is and how robots join it."""
     # A listen endpoint on port 0 has a free port that zenoh does not tell: name the endpoints
     # this process connects to instead (the router, say), which reach it as well.
@@ -130,7 +130,7 @@ def serve(node: Node, door: LockstepDoor[Any], *, frames: bool = True) -> None:
 
     for fn in (join, step, idle, wake, leave, status):
         node.export(fn, name=fn.__name__)
-    node.team.on_gone(lambda name: door.drop(name, "left the team"))
+    node.membership.on_gone(lambda name: door.drop(name, "left the team"))
     from sim_hw.view import export_scene  # what a viewer asks: view.scene (and view.frame)
 
     export_scene(node, door)
@@ -196,7 +196,7 @@ async def run_world_process(
     export: Callable[[Node, D], None],
     *,
     name: str,
-    team: Team,
+    team: TeamCredentials,
     config: NodeConfig,
     until_tick: int | None = None,
     quit_when_empty: bool = False,

@@ -78,7 +78,7 @@ class Collectives:
             node.export(procedure, name)
         # Only a member gone for LOST_GRACE counts as lost: when a router restarts, every
         # member sees the others leave a moment before it sees its own link go.
-        node.team.on_gone(self._member_left, grace=LOST_GRACE)
+        node.membership.on_gone(self._member_left, grace=LOST_GRACE)
 
     # -- each step's record, and its decision ------------------------------------------------
 
@@ -145,7 +145,7 @@ class Collectives:
         if not state.served:
             state.served, state.kind, state.members = True, kind, frozenset(members)
             name = self.node.name
-            state.lost = [m for m in members if m < name and m not in self.node.team]
+            state.lost = [m for m in members if m < name and m not in self.node.membership]
             state.takeover = bool(state.lost)
         return state
 
@@ -262,7 +262,7 @@ class Collectives:
             return
 
     def _expected(self, state: Step) -> set[str]:
-        return {m for m in state.members if m in self.node.team}
+        return {m for m in state.members if m in self.node.membership}
 
     async def or_join(self, run: str, step: int, member: str, members: list[str]) -> Any:
         """A member waits for the decision."""
@@ -333,7 +333,7 @@ class Collectives:
             return
         for member in pending:
             # a member that finished in time: its claim is coming; one that is gone cannot say
-            if member not in state.finished and member in self.node.team:
+            if member not in state.finished and member in self.node.membership:
                 self._ask_passed(state, member, at)
 
     # -- the designated member: AND ----------------------------------------------------------

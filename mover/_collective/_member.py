@@ -321,7 +321,7 @@ class TaskTeam:
         state = self.collectives.serve(self.run, metrics.step, self.members)
 
         async def send(member: str) -> None:
-            while member in self.node.team or not self.node.connected():
+            while member in self.node.membership or not self.node.connected():
                 try:
                     await self._ask(
                         metrics,
@@ -368,7 +368,7 @@ class TaskTeam:
             return self.me  # a team of one needs no links
         if not self.node.connected():  # never choose while cut off: every view is empty
             await self._recover(self.members)
-        alive = [m for m in self.members if m == self.me or m in self.node.team]
+        alive = [m for m in self.members if m == self.me or m in self.node.membership]
         return alive[0]
 
     async def _ask(self, metrics: StepMetrics, member: str, procedure: str, *args: Any) -> Any:

@@ -36,7 +36,7 @@ async def wait_reachable(
     while node.connected():
         # A failed call and a lost link can be seen in either order: wait a moment to tell a
         # member that is gone (we stay linked) from an outage (our links go too).
-        if wanted <= node.team.members():
+        if wanted <= node.membership.members():
             return True
         if time.monotonic() > grace:
             return False
@@ -48,8 +48,8 @@ async def wait_reachable(
             return False
         await asyncio.sleep(0.05)
     settle = time.monotonic() + 2.0
-    while not wanted <= node.team.members() and time.monotonic() < settle:  # noqa: ASYNC110
+    while not wanted <= node.membership.members() and time.monotonic() < settle:  # noqa: ASYNC110
         await asyncio.sleep(0.05)
-    back = wanted <= node.team.members()
+    back = wanted <= node.membership.members()
     log.info("%s: links back; %s %s", node.name, sorted(wanted), "back" if back else "gone")
     return back

@@ -31,7 +31,7 @@ from pathlib import Path
 from types import TracebackType
 from typing import IO, Any, TypeVar
 
-from .._config import NodeConfig, Team, free_port
+from .._config import NodeConfig, TeamCredentials, free_port
 from .._exceptions import MoverError
 from .._node import Node
 from .._procs import Child, ProcessExited, start, stop
@@ -264,9 +264,9 @@ class Supervisor:
         names = [c.plan.name for c in self.children if c.plan.member]
         bound = self.plan.ready_timeout or min(MAX_WAIT, 30.0 + 2.0 * len(self.children))
         try:
-            await self.guard(self.node.team.wait_for(names, timeout=bound))
+            await self.guard(self.node.membership.wait_for(names, timeout=bound))
         except TimeoutError:
-            missing = sorted(set(names) - self.node.team.members())
+            missing = sorted(set(names) - self.node.membership.members())
             raise UpError(
                 f"not ready within {bound:g} s: {', '.join(missing)} "
                 f"did not join (see their logs in {self.out})"
@@ -352,7 +352,7 @@ class Supervisor:
         t0 = time.monotonic()
         # A process that is not serving yet may be importing, where SIGINT is a traceback:
         # it gets SIGTERM (it has nothing to close yet).
-        team = self.node.team.members() if self.node is not None else frozenset()
+        team = self.node.membership.members() if self.node is not None else frozenset()
         for c in self.children:
             c.ready = c.said_ready.is_set() or c.plan.name in team
             c.process.interruptible = c.ready
@@ -399,7 +399,7 @@ def _open_log(path: Path) -> IO[bytes]:
         raise UpError(f"cannot write {path}: {exc.strerror or exc}") from None
 
 
-def team_of(plan: TeamPlan) -> tuple[Team, str]:
+def team_of(plan: TeamPlan) -> tuple[TeamCredentials, str]:
     """The team and where its key came from: the file's ``key_file``, the environment
     (``MOVER_TEAM_KEY`` or ``MOVER_TEAM_KEY_FILE``), else a fresh key."""
     if plan.key_file is not None:
@@ -410,15 +410,15 @@ def team_of(plan: TeamPlan) -> tuple[Team, str]:
                 f"cannot read the key file {plan.key_file}: {exc.strerror or exc}"
             ) from None
         try:
-            return Team(plan.name, bytes.fromhex(text)), f"from {plan.key_file}"
+            return TeamCredentials(plan.name, bytes.fromhex(text)), f"from {plan.key_file}"
         except ValueError as exc:
             raise UpError(f"the key file {plan.key_file}: not a hex key ({exc})") from None
     if os.environ.get("MOVER_TEAM_KEY") or os.environ.get("MOVER_TEAM_KEY_FILE"):
         try:
-            return Team.from_env(plan.name), "from the environment"
+            return TeamCredentials.from_env(plan.name), "from the environment"
         except ValueError as exc:
             raise UpError(str(exc)) from None
-    return Team.generate(plan.name), "fresh"
+    return TeamCredentials.generate(plan.name), "fresh"
 
 
 def _short(value: Any) -> str:

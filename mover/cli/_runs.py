@@ -20,7 +20,7 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from .._config import NodeConfig, Team
+from .._config import NodeConfig, TeamCredentials
 from .._exceptions import CallError
 from .._keys import check_name
 from . import (
@@ -133,7 +133,7 @@ def _progress(node: Node, run: str) -> asyncio.Task[None]:
 
 
 async def _run(
-    team: Team,
+    team: TeamCredentials,
     config: NodeConfig,
     args: argparse.Namespace,
     robots: list[str] | None,
@@ -148,17 +148,17 @@ async def _run(
     ) as node:
         try:
             if robots:
-                await node.team.wait_for(robots, timeout=args.wait)
+                await node.membership.wait_for(robots, timeout=args.wait)
             else:
                 await asyncio.sleep(args.wait)
         except TimeoutError:
-            missing = sorted(set(robots or ()) - node.team.members())
+            missing = sorted(set(robots or ()) - node.membership.members())
             print(f"mover run: not in team {team.name!r}: {', '.join(missing)}", file=sys.stderr)
             return 1
         members = robots or sorted(
             n
-            for n in node.team.members()
-            if (i := node.team.info(n)) is not None and i.kind not in ("tool", "world")
+            for n in node.membership.members()
+            if (i := node.membership.info(n)) is not None and i.kind not in ("tool", "world")
         )
         if not members:
             print(f"mover run: no members in team {team.name!r}", file=sys.stderr)
@@ -213,7 +213,9 @@ async def _find_run(
 ) -> tuple[dict[str, dict[str, Any]], dict[str, list[dict[str, Any]] | str]]:
     """Who knows run ``run``: {member: its status of the run}, and every member's statuses."""
     await asyncio.sleep(wait)
-    names = sorted(n for n in node.team.members() if (i := node.team.info(n)) and i.kind != "tool")
+    names = sorted(
+        n for n in node.membership.members() if (i := node.membership.info(n)) and i.kind != "tool"
+    )
     statuses = await _statuses(node, names)
     found = {
         member: entry
@@ -225,7 +227,7 @@ async def _find_run(
     return found, statuses
 
 
-async def _attach(team: Team, config: NodeConfig, args: argparse.Namespace) -> int:
+async def _attach(team: TeamCredentials, config: NodeConfig, args: argparse.Namespace) -> int:
     from .._node import Node
     from .._programs import outcomes
 
@@ -272,7 +274,7 @@ def run_runs(args: argparse.Namespace) -> int:
     return asyncio.run(_runs(team, config, args))
 
 
-async def _runs(team: Team, config: NodeConfig, args: argparse.Namespace) -> int:
+async def _runs(team: TeamCredentials, config: NodeConfig, args: argparse.Namespace) -> int:
     _, statuses = await observe(team, config, args.wait, "runs")
     runs: dict[str, dict[str, Any]] = {}
     for member, entries in statuses.items():
@@ -324,7 +326,7 @@ def run_cancel(args: argparse.Namespace) -> int:
     return asyncio.run(_cancel(team, config, args))
 
 
-async def _cancel(team: Team, config: NodeConfig, args: argparse.Namespace) -> int:
+async def _cancel(team: TeamCredentials, config: NodeConfig, args: argparse.Namespace) -> int:
     from .._node import Node
     from .._programs import CANCEL_WAIT
 

@@ -19,7 +19,7 @@ import sys
 import time
 from typing import TYPE_CHECKING, Any
 
-from .._config import NodeConfig, Team
+from .._config import NodeConfig, TeamCredentials
 from .._exceptions import CallError, NotDelivered, UnknownProcedure, WireError
 from .._keys import check_name
 from . import (
@@ -73,7 +73,7 @@ def run_ps(args: argparse.Namespace) -> int:
     return asyncio.run(_ps(team, config, args))
 
 
-async def _ps(team: Team, config: NodeConfig, args: argparse.Namespace) -> int:
+async def _ps(team: TeamCredentials, config: NodeConfig, args: argparse.Namespace) -> int:
     rows, statuses = await observe(team, config, args.wait, "ps")
     if args.json:
         for i in rows:
@@ -112,7 +112,7 @@ async def _ps(team: Team, config: NodeConfig, args: argparse.Namespace) -> int:
 
 
 async def observe(
-    team: Team, config: NodeConfig, wait: float, tag: str
+    team: TeamCredentials, config: NodeConfig, wait: float, tag: str
 ) -> tuple[list[Any], dict[str, list[dict[str, Any]] | str]]:
     """The team's members as an observer (not a member) sees them after ``wait`` seconds, and
     each one's ``mover.status`` (tools are not asked)."""
@@ -122,7 +122,7 @@ async def observe(
         f"{tag}-{secrets.token_hex(3)}", team, kind="tool", config=config, observer=True
     ) as node:
         await asyncio.sleep(wait)
-        infos = [node.team.info(n) for n in sorted(node.team.members())]
+        infos = [node.membership.info(n) for n in sorted(node.membership.members())]
         rows = [i for i in infos if i is not None]
         statuses = await _statuses(node, [i.name for i in rows if i.kind != "tool"])
     return rows, statuses
@@ -203,7 +203,7 @@ def run_call(args: argparse.Namespace) -> int:
 
 
 async def _call(
-    team: Team,
+    team: TeamCredentials,
     config: NodeConfig,
     args: argparse.Namespace,
     positional: list[Any],
@@ -215,9 +215,9 @@ async def _call(
         f"cli-{secrets.token_hex(3)}", team, kind="tool", config=config, observer=True
     ) as node:
         try:
-            await node.team.wait_for({args.robot}, timeout=args.wait)
+            await node.membership.wait_for({args.robot}, timeout=args.wait)
         except TimeoutError:
-            seen = ", ".join(sorted(node.team.members())) or "none"
+            seen = ", ".join(sorted(node.membership.members())) or "none"
             print(
                 f"mover call: no member {args.robot!r} in team {team.name!r} "
                 f"(members seen: {seen})",
@@ -262,7 +262,7 @@ def register_keygen(sub: Sub) -> None:
 
 def run_keygen(args: argparse.Namespace) -> int:
     try:
-        team = Team.generate(args.team)
+        team = TeamCredentials.generate(args.team)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     if args.out:
@@ -328,7 +328,7 @@ def run_echo(args: argparse.Namespace) -> int:
     return asyncio.run(_echo(team, config, args))
 
 
-async def _echo(team: Team, config: NodeConfig, args: argparse.Namespace) -> int:
+async def _echo(team: TeamCredentials, config: NodeConfig, args: argparse.Namespace) -> int:
     from .._node import Node
 
     where = args.at

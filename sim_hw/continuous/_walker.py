@@ -57,11 +57,11 @@ class _Radio:
 
 
 async def _main(args: argparse.Namespace) -> list[list[float]]:
-    from mover import Node, NodeConfig, Team
+    from mover import Node, NodeConfig, TeamCredentials
 
     from ._hardware import remote
 
-    team = Team.from_env()
+    team = TeamCredentials.from_env()
     radio = _Radio()  # the node's locator; it reads the HAL's radio once there is one
     async with Node(
         args.robot, team=team, kind="robot", config=NodeConfig.from_env(), locator=radio

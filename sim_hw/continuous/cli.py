@@ -52,7 +52,7 @@ def register_world(sub: Any) -> None:
 
 def run_world(args: argparse.Namespace) -> int:
     """Run a world process until interrupted (or --until, --quit-when-empty)."""
-    from mover import NodeConfig, Team
+    from mover import NodeConfig, TeamCredentials
     from sim_hw._process import run_world_process
 
     from . import Recorder, WorldFileError, WorldServer, load_world, serve_world
@@ -63,7 +63,7 @@ def run_world(args: argparse.Namespace) -> int:
     except WorldFileError as exc:
         raise UsageError(str(exc)) from None
     try:
-        team, config = Team.from_env(), NodeConfig.from_env()
+        team, config = TeamCredentials.from_env(), NodeConfig.from_env()
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     world = World(spec, seed=args.seed)

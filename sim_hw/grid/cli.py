@@ -182,7 +182,7 @@ def _write_snapshot(server: Any, where: Path) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run a grid world process until interrupted (or --quit-when-empty)."""
-    from mover import NodeConfig, Team
+    from mover import NodeConfig, TeamCredentials
     from sim_hw._process import ready_line, run_world_process
 
     from ._server import serve_grid
@@ -219,7 +219,7 @@ def run(args: argparse.Namespace) -> int:
 
         server.on_tick.append(lambda _commands: on_round(server))
     try:
-        team, config = Team.from_env(), NodeConfig.from_env()
+        team, config = TeamCredentials.from_env(), NodeConfig.from_env()
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     try:

@@ -28,7 +28,7 @@ from typing import Any
 
 import rerun as rr
 
-from mover import CallError, MoverError, Node, NodeConfig, Team
+from mover import CallError, MoverError, Node, NodeConfig, TeamCredentials
 from sim_hw._process import STATE_TOPIC
 
 from ._entities import Drawing, log_entities, log_frame
@@ -106,7 +106,7 @@ class LiveView:
         self.say = say
         self.sessions = 0
 
-    async def run(self, team: Team, config: NodeConfig) -> None:
+    async def run(self, team: TeamCredentials, config: NodeConfig) -> None:
         """Watch until cancelled."""
         name = f"view-{secrets.token_hex(3)}"
         async with Node(name, team, kind="tool", config=config, observer=True) as node:
@@ -136,11 +136,11 @@ class LiveView:
             await asyncio.sleep(0.25)  # membership changes are rare: a look 4 times a second
 
     def _find(self, node: Node) -> str | None:
-        members = node.team.members()
+        members = node.membership.members()
         if self.world is not None:
             return self.world if self.world in members else None
         worlds = sorted(
-            n for n in members if (i := node.team.info(n)) is not None and i.kind == "world"
+            n for n in members if (i := node.membership.info(n)) is not None and i.kind == "world"
         )
         return worlds[0] if worlds else None
 
@@ -181,9 +181,9 @@ class LiveView:
         return self.record.with_name(f"{self.record.stem}-{self.sessions}{self.record.suffix}")
 
     async def _wait_gone(self, node: Node, world: str) -> None:
-        while world in node.team.members():
+        while world in node.membership.members():
             with contextlib.suppress(TimeoutError):
-                await node.team.wait_gone(world, timeout=60.0)
+                await node.membership.wait_gone(world, timeout=60.0)
 
     async def _stream(
         self, node: Node, world: str, drawing: Drawing, rec: rr.RecordingStream, states: Any

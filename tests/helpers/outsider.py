@@ -9,11 +9,11 @@ from __future__ import annotations
 import asyncio
 import sys
 
-from mover import Node, NodeConfig, Refused, Team, UnknownRobot
+from mover import Node, NodeConfig, Refused, TeamCredentials, UnknownRobot
 
 
 async def main(target: str) -> None:
-    team = Team.from_env()
+    team = TeamCredentials.from_env()
     async with Node("outsider", team, config=NodeConfig.from_env()) as node:
         await asyncio.sleep(0.5)  # let the links come up
         for procedure in ("bump", "add"):

@@ -10,7 +10,7 @@ from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from pathlib import Path
 
-from mover import Team
+from mover import TeamCredentials
 from mover.testing import Cluster as _Cluster
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -20,16 +20,16 @@ class Cluster(_Cluster):
     """A cluster that can also start the test robot (tests/helpers/robot_proc.py)."""
 
     async def robot(
-        self, name: str, *extra: str, team: Team | None = None
+        self, name: str, *extra: str, team: TeamCredentials | None = None
     ) -> asyncio.subprocess.Process:
         """Start a test robot."""
         return await self.start("tests.helpers.robot_proc", "--name", name, *extra, team=team)
 
 
 @asynccontextmanager
-async def cluster(team: Team | None = None) -> AsyncIterator[Cluster]:
+async def cluster(team: TeamCredentials | None = None) -> AsyncIterator[Cluster]:
     """A cluster rooted at the repository, whose processes are all killed on exit."""
-    c = Cluster(team or Team.generate("alpha"), cwd=ROOT, env={"PYTHONPATH": str(ROOT)})
+    c = Cluster(team or TeamCredentials.generate("alpha"), cwd=ROOT, env={"PYTHONPATH": str(ROOT)})
     try:
         yield c
     finally:

@@ -15,14 +15,14 @@ import time
 from pathlib import Path
 from typing import Any
 
-from mover import FixedLocator, Node, NodeConfig, Team
+from mover import FixedLocator, Node, NodeConfig, TeamCredentials
 from mover._collective import Collectives
 
 TOPICS = ("news", "chatter", "probe")
 
 
 async def main(args: argparse.Namespace) -> None:
-    team = Team.from_env()
+    team = TeamCredentials.from_env()
     state = {"bumps": 0}
     heard: dict[str, list[list[Any]]] = {t: [] for t in TOPICS}
     locator = FixedLocator(args.x, args.y, args.heading)
@@ -104,7 +104,7 @@ async def main(args: argparse.Namespace) -> None:
             return not collectives._listener.done() and not any(t.done() for t in listeners)
 
         node.export(listening)
-        await node.team.wait_for({node.name}, timeout=10)
+        await node.membership.wait_for({node.name}, timeout=10)
         print("READY", os.getpid(), flush=True)
         try:
             await asyncio.get_running_loop().run_in_executor(None, sys.stdin.read)

@@ -7,14 +7,15 @@ from contextlib import AsyncExitStack
 
 import pytest_asyncio
 
-from mover import Node, NodeConfig, Team, free_port
+from mover import Node, NodeConfig, TeamCredentials
+from mover._config import free_port
 
 
 @pytest_asyncio.fixture
 async def nodes() -> AsyncIterator[list[Node]]:
     """Five nodes of one team in this process, n0 listening, the others connected to it, each
     seeing all five."""
-    team = Team.generate("alpha")
+    team = TeamCredentials.generate("alpha")
     port = free_port()
     async with AsyncExitStack() as stack:
         out = [
@@ -29,5 +30,5 @@ async def nodes() -> AsyncIterator[list[Node]]:
                 )
             )
         for n in out:
-            await n.team.wait_for({f"n{i}" for i in range(5)}, timeout=10)
+            await n.membership.wait_for({f"n{i}" for i in range(5)}, timeout=10)
         yield out

@@ -32,7 +32,7 @@ BOUND = 1.0  # seconds: no call may take longer while the outsider is at work
 async def world() -> AsyncIterator[tuple[Cluster, Node]]:
     async with cluster() as c, Node("tester", c.team, kind="test", config=c.seed) as node:
         await c.robot("r1")
-        await node.team.wait_for({"r1"}, timeout=10)
+        await node.membership.wait_for({"r1"}, timeout=10)
         yield c, node
 
 
@@ -113,7 +113,7 @@ async def test_a_broadcast_replayed_to_a_late_joiner_is_refused(
         lambda: node.call("r1", "send", "chatter", "before r5 joined", None, timeout=5),
     )
     await c.robot("r5")
-    await node.team.wait_for({"r5"}, timeout=10)
+    await node.membership.wait_for({"r5"}, timeout=10)
     await asyncio.sleep(0.5)  # r5 has verified r1 by now
     node.zenoh_session.put(f"mover/{c.team.name}/bc/chatter", frame)
     await node.call("r1", "send", "chatter", "after r5 joined", None, timeout=5)
@@ -128,7 +128,7 @@ async def test_a_call_replayed_to_a_restarted_member_is_refused(
 ) -> None:
     c, node = world
     proc = await c.robot("r6")
-    await node.team.wait_for({"r6"}, timeout=10)
+    await node.membership.wait_for({"r6"}, timeout=10)
     key = f"mover/{c.team.name}/rpc/r6"
     overheard: list[bytes] = []
 
@@ -144,9 +144,9 @@ async def test_a_call_replayed_to_a_restarted_member_is_refused(
     assert overheard, "the eavesdropper overheard no call"
     proc.kill()
     await proc.wait()
-    await node.team.wait_gone("r6", timeout=10)
+    await node.membership.wait_gone("r6", timeout=10)
     await c.robot("r6")
-    await node.team.wait_for({"r6"}, timeout=10)
+    await node.membership.wait_for({"r6"}, timeout=10)
     answers = [await _raw_get(node, key, frame) for frame in overheard]
     assert all(a.startswith(b"M2") for a in answers)  # sealed refusals, for the tester
     assert await node.call("r6", "bumps", timeout=5) == 0  # the replay ran nothing
@@ -159,7 +159,7 @@ async def test_a_member_whose_clock_is_an_hour_off_works(
     c, node = world
     name = "late" if skew > 0 else "early"
     await c.start("tests.helpers.skewed", str(skew), "tests.helpers.robot_proc", "--name", name)
-    await node.team.wait_for({name}, timeout=10)
+    await node.membership.wait_for({name}, timeout=10)
     assert await node.call(name, "add", 1, 2, timeout=5) == 3
     assert await node.call(name, "call_other", "r1", "add", [40, 2], timeout=5) == 42
     await node.call(name, "send", "news", {"from": name}, None, timeout=5)

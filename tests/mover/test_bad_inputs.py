@@ -276,7 +276,7 @@ async def refusals(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Refusa
     files = _files(tmp_path_factory.mktemp("bad_inputs"))
     async with cluster(cwd=ROOT) as c, c.launcher() as node:
         await c.start("robots", "--name", "r1", "--hardware", "none")
-        await node.team.wait_for({"r1"}, timeout=20)
+        await node.membership.wait_for({"r1"}, timeout=20)
         slots = asyncio.Semaphore(2)
 
         async def one(params: Any) -> Refusal:

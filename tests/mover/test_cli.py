@@ -12,7 +12,7 @@ from typing import Any
 
 import pytest
 
-from mover import Node, Team
+from mover import Node, TeamCredentials
 from mover.cli import (
     LOG_LEVEL_ENV,
     UsageError,
@@ -46,7 +46,7 @@ async def mover(
 async def test_ps_and_call() -> None:
     async with cluster() as c, Node("tester", c.team, kind="test", config=c.seed) as node:
         await c.robot("r1", "--kind", "foot-bot")
-        await node.team.wait_for({"r1"}, timeout=10)
+        await node.membership.wait_for({"r1"}, timeout=10)
         env = {**c.team.env(), **c.peer.env()}
         code, out, err = await mover("ps", "--wait", "1.5", "--json", env=env)
         assert code == 0, err
@@ -81,7 +81,7 @@ def _team_parser() -> argparse.ArgumentParser:
 def test_team_arguments_default_to_the_environment(monkeypatch: pytest.MonkeyPatch) -> None:
     args = _team_parser().parse_args([])
     assert (args.team, args.connect) == (None, None)
-    team = Team.generate("alpha")
+    team = TeamCredentials.generate("alpha")
     for name, value in team.env().items():
         monkeypatch.setenv(name, value)
     monkeypatch.setenv("MOVER_CONNECT", "tcp/127.0.0.1:7001")

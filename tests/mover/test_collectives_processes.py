@@ -10,7 +10,8 @@ from pathlib import Path
 
 import pytest
 
-from mover import Node, NodeConfig, Refused, Team, UnknownRobot, free_port, launch
+from mover import Node, NodeConfig, Refused, TeamCredentials, UnknownRobot, launch
+from mover._config import free_port
 from tests.helpers.procs import Cluster, cluster
 
 pytestmark = pytest.mark.processes
@@ -22,7 +23,7 @@ async def start_team(
     await asyncio.gather(
         *(c.start("tests.helpers.team_proc", "--name", n, config=config) for n in names)
     )
-    await node.team.wait_for(names, timeout=30)
+    await node.membership.wait_for(names, timeout=30)
 
 
 async def test_ties_always_agree_on_one_winner_10_processes_100_rounds() -> None:
@@ -120,7 +121,7 @@ async def test_router_restarts_mid_step_never_lose_a_live_member() -> None:
                     expected = {n: {"a": "A", "b": "B", "c": "C"} for n in names}
                 spurious += sum("MemberLost" in str(o.get("error", "")) for o in outcomes.values())
                 assert results == expected, (cycle, outcomes)
-                await node.team.wait_for(names, timeout=20)
+                await node.membership.wait_for(names, timeout=20)
     finally:
         r.kill()
         await r.wait()
@@ -131,7 +132,7 @@ async def test_router_restarts_mid_step_never_lose_a_live_member() -> None:
 async def test_an_outsider_cannot_start_a_program() -> None:
     async with cluster() as c, Node("launcher", c.team, kind="tool", config=c.seed) as node:
         await start_team(c, node, ["a"])
-        async with Node("intruder", Team.generate("alpha"), config=c.peer) as outsider:
+        async with Node("intruder", TeamCredentials.generate("alpha"), config=c.peer) as outsider:
             await asyncio.sleep(0.5)
             with pytest.raises((Refused, UnknownRobot)):
                 await outsider.call(

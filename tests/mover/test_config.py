@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from mover import NodeConfig, Team
+from mover import NodeConfig, TeamCredentials
 
 
 def test_team_from_env(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
@@ -14,25 +14,25 @@ def test_team_from_env(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     monkeypatch.delenv("MOVER_TEAM_KEY", raising=False)
     monkeypatch.delenv("MOVER_TEAM_KEY_FILE", raising=False)
     with pytest.raises(ValueError, match="no team"):
-        Team.from_env()
+        TeamCredentials.from_env()
     with pytest.raises(ValueError, match="no key for team 'alpha'"):
-        Team.from_env("alpha")
+        TeamCredentials.from_env("alpha")
     monkeypatch.setenv("MOVER_TEAM_KEY", "zz")
     with pytest.raises(ValueError, match="not a hex string"):
-        Team.from_env("alpha")
+        TeamCredentials.from_env("alpha")
     monkeypatch.setenv("MOVER_TEAM_KEY", "00ff")
     with pytest.raises(ValueError, match="at least 16 bytes"):
-        Team.from_env("alpha")
+        TeamCredentials.from_env("alpha")
     monkeypatch.delenv("MOVER_TEAM_KEY")
     key = tmp_path / "key"
     key.write_text("ab" * 32 + "\n")
     monkeypatch.setenv("MOVER_TEAM_KEY_FILE", str(key))
-    assert Team.from_env("alpha").key == b"\xab" * 32
+    assert TeamCredentials.from_env("alpha").key == b"\xab" * 32
     monkeypatch.setenv("MOVER_TEAM_KEY_FILE", str(tmp_path / "missing"))
     with pytest.raises(ValueError, match="cannot read MOVER_TEAM_KEY_FILE"):
-        Team.from_env("alpha")
+        TeamCredentials.from_env("alpha")
     with pytest.raises(ValueError, match="bad team name"):
-        Team("a/b", b"k" * 32)
+        TeamCredentials("a/b", b"k" * 32)
 
 
 def test_node_config(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:

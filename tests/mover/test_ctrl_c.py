@@ -25,7 +25,8 @@ from typing import Any
 import pytest
 import pytest_asyncio
 
-from mover import Node, NodeConfig, free_port
+from mover import Node, NodeConfig
+from mover._config import free_port
 from sim_hw.grid import place_resources, random_obstacles
 from tests.helpers.procs import ROOT, Cluster, cluster
 from tests.programs._grid import WORLD as GRID_WORLD
@@ -111,7 +112,7 @@ async def interrupted_run(tmp_path_factory: pytest.TempPathFactory) -> dict[str,
         # together: each says READY once in the world, and the world starts with all three
         started = [mover(c, tmp / f"{name}.log", "robot", "--name", name) for name in ROBOTS]
         robots = dict(zip(ROBOTS, await asyncio.gather(*started), strict=True))
-        await node.team.wait_for(["world", *ROBOTS], timeout=30)
+        await node.membership.wait_for(["world", *ROBOTS], timeout=30)
         run = "sr"
         launcher = await mover(
             c,
@@ -137,7 +138,7 @@ async def interrupted_run(tmp_path_factory: pytest.TempPathFactory) -> dict[str,
         found["run went on"] = not any(o.done() for o in outcomes.values())
         found["elvis"] = await stop(robots["elvis"], signal.SIGINT, tmp / "elvis.log")
         try:
-            await node.team.wait_gone("elvis", timeout=5)
+            await node.membership.wait_gone("elvis", timeout=5)
             found["seen leaving"] = True
         except TimeoutError:
             found["seen leaving"] = False
@@ -177,9 +178,9 @@ async def test_sigterm_of_a_robot_is_a_clean_stop(tmp_path: Path) -> None:
     async with cluster() as c, c.launcher() as node:
         log = tmp_path / "r1.log"
         robot = await mover(c, log, "robot", "--name", "r1", "--hardware", "none")
-        await node.team.wait_for(["r1"], timeout=20)
+        await node.membership.wait_for(["r1"], timeout=20)
         (await stop(robot, signal.SIGTERM, log)).check()
-        await node.team.wait_gone("r1", timeout=5)
+        await node.membership.wait_gone("r1", timeout=5)
 
 
 async def test_ctrl_c_of_a_lock_step_world_mid_run(tmp_path: Path) -> None:
@@ -189,7 +190,7 @@ async def test_ctrl_c_of_a_lock_step_world_mid_run(tmp_path: Path) -> None:
         await asyncio.gather(
             *(mover(c, tmp_path / f"{name}.log", "robot", "--name", name) for name in ROBOTS[1:])
         )
-        await node.team.wait_for(["world", *ROBOTS[1:]], timeout=30)
+        await node.membership.wait_for(["world", *ROBOTS[1:]], timeout=30)
         for m in ROBOTS[1:]:
             await node.call(m, "mover.start", "search_and_rescue", "sr", ROBOTS[1:], {}, timeout=10)
 
@@ -198,7 +199,7 @@ async def test_ctrl_c_of_a_lock_step_world_mid_run(tmp_path: Path) -> None:
 
         await until(ticking, 30, "ticking")
         (await stop(world, signal.SIGINT, log)).check()
-        await node.team.wait_gone("world", timeout=5)
+        await node.membership.wait_gone("world", timeout=5)
 
 
 async def test_ctrl_c_of_a_grid_world_mid_run(tmp_path: Path) -> None:
@@ -211,7 +212,7 @@ async def test_ctrl_c_of_a_grid_world_mid_run(tmp_path: Path) -> None:
         log = tmp_path / "gridworld.log"
         world = await mover(c, log, "gridworld", str(field), "--expect", "2")
         await start_robots(c, names, [{"view": 0}] * 2)
-        await node.team.wait_for([GRID_WORLD, *names], timeout=20)
+        await node.membership.wait_for([GRID_WORLD, *names], timeout=20)
         for m in names:
             await node.call(m, "mover.start", "foraging", "forage", names, {"seed": 5}, timeout=10)
 
@@ -221,7 +222,7 @@ async def test_ctrl_c_of_a_grid_world_mid_run(tmp_path: Path) -> None:
 
         await until(moving, 30, "moving")
         (await stop(world, signal.SIGINT, log)).check()
-        await node.team.wait_gone(GRID_WORLD, timeout=5)
+        await node.membership.wait_gone(GRID_WORLD, timeout=5)
 
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
@@ -238,10 +239,10 @@ async def test_ctrl_c_of_a_router_with_members_behind_it(
                 "mover._cli", "robot", "--name", name, "--hardware", "none", config=behind
             )
         async with Node("tester", c.team, kind="tool", config=behind) as node:
-            await node.team.wait_for(["r1", "r2"], timeout=20)
+            await node.membership.wait_for(["r1", "r2"], timeout=20)
             assert await node.call("r1", "mover.programs", timeout=5) is not None
             (await stop(router, sig, log)).check()
-            await node.team.wait_gone("r1", timeout=10)  # the link to the others went with it
+            await node.membership.wait_gone("r1", timeout=10)  # the link to the others went with it
 
 
 async def test_ctrl_c_of_mover_demo_mid_run(tmp_path: Path) -> None:

@@ -110,7 +110,7 @@ async def test_fuzzed_frames_leave_a_member_alive_bounded_and_quiet(tmp_path: Pa
                 env=env, cwd=ROOT,
             )  # fmt: skip
         c.procs.append(proc)
-        await node.team.wait_for({"r1"}, timeout=15)
+        await node.membership.wait_for({"r1"}, timeout=15)
         assert await node.call("r1", "add", 1, 2, timeout=5) == 3
         before = await node.call("r1", "rss_kb", timeout=5)
         session = node.zenoh_session

@@ -72,7 +72,7 @@ async def test_call_list_shows_procedures_signatures_and_docstrings() -> None:
 async def test_echo_prints_decoded_messages_with_distance_from_its_place() -> None:
     async with cluster() as c, c.launcher() as node:
         async with Node("ernst", c.team, config=c.peer, locator=_At((0.0, 0.0, 0.0))) as ernst:
-            await node.team.wait_for(["ernst"], timeout=10)
+            await node.membership.wait_for(["ernst"], timeout=10)
             echo = asyncio.ensure_future(
                 _mover(c, "echo", "hello", "--at", "1,0,3.14159", "--count", "2", "--json")
             )

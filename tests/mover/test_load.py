@@ -15,7 +15,8 @@ from pathlib import Path
 
 import pytest
 
-from mover import ConfigError, Node, NodeConfig, Team, free_port
+from mover import ConfigError, Node, NodeConfig, TeamCredentials
+from mover._config import free_port
 
 pytestmark = pytest.mark.processes
 
@@ -83,16 +84,16 @@ def test_a_bad_timeout_field_is_refused(fields: dict[str, object]) -> None:
 
 async def test_the_node_uses_its_hello_and_grace_settings() -> None:
     """A hello question waits hello_timeout; what a member held is given up after leave_grace."""
-    team, port = Team.generate("alpha"), free_port()
+    team, port = TeamCredentials.generate("alpha"), free_port()
     fast = {"hello_timeout": 0.5, "hello_retries": 1, "leave_grace": 0.0}
     seed = NodeConfig(listen=(f"tcp/127.0.0.1:{port}",), **fast)  # type: ignore[arg-type]
     async with Node("a", team, config=seed) as a:
         gone: list[str] = []
-        a.team.on_gone(gone.append)
+        a.membership.on_gone(gone.append)
         async with Node("b", team, config=NodeConfig(connect=(f"tcp/127.0.0.1:{port}",))):
-            await a.team.wait_for({"b"}, timeout=10)
-        await a.team.wait_gone("b", timeout=5)
-        assert await a.team.verify("nobody", timeout=2.0) is None
+            await a.membership.wait_for({"b"}, timeout=10)
+        await a.membership.wait_gone("b", timeout=5)
+        assert await a.membership.verify("nobody", timeout=2.0) is None
         for _ in range(50):  # leave_grace 0: given up on the next turns of the loop
             if gone:
                 break

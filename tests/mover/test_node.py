@@ -11,7 +11,8 @@ import threading
 
 import pytest
 
-from mover import MemberEvent, MoverError, Node, NodeClosed, NodeConfig, Team, free_port
+from mover import MemberEvent, MoverError, Node, NodeClosed, NodeConfig, TeamCredentials
+from mover._config import free_port
 
 
 def configs() -> tuple[NodeConfig, NodeConfig]:
@@ -25,9 +26,9 @@ def configs() -> tuple[NodeConfig, NodeConfig]:
 async def test_clean_shutdown_leaves_no_threads() -> None:
     before = set(threading.enumerate())
     seed, peer = configs()
-    team = Team.generate("alpha")
+    team = TeamCredentials.generate("alpha")
     async with Node("a", team, config=seed) as a, Node("b", team, config=peer):
-        await a.team.wait_for({"a", "b"}, timeout=10)
+        await a.membership.wait_for({"a", "b"}, timeout=10)
     assert set(threading.enumerate()) - before == set()
     with pytest.raises(MoverError, match="not open"):
         await a.call("b", "x")
@@ -35,20 +36,20 @@ async def test_clean_shutdown_leaves_no_threads() -> None:
 
 async def test_join_and_leave_events() -> None:
     seed, peer = configs()
-    team = Team.generate("alpha")
+    team = TeamCredentials.generate("alpha")
     async with Node("a", team, config=seed) as a:
         events: list[MemberEvent] = []
 
         async def watch() -> None:
-            async for event in a.team.events():
+            async for event in a.membership.events():
                 events.append(event)
 
         watcher = asyncio.create_task(watch())
         async with Node("b", team, config=peer, kind="eye-bot"):
-            await a.team.wait_for({"b"}, timeout=10)
-            info = a.team.info("b")
+            await a.membership.wait_for({"b"}, timeout=10)
+            info = a.membership.info("b")
             assert info is not None and info.kind == "eye-bot"
-        await a.team.wait_gone("b", timeout=5)
+        await a.membership.wait_gone("b", timeout=5)
         await asyncio.sleep(0)
         watcher.cancel()
         assert [(e.kind, e.name) for e in events] == [("join", "b"), ("leave", "b")]
@@ -56,14 +57,14 @@ async def test_join_and_leave_events() -> None:
 
 async def test_pending_call_fails_when_the_caller_closes() -> None:
     seed, peer = configs()
-    team = Team.generate("alpha")
+    team = TeamCredentials.generate("alpha")
     async with Node("a", team, config=seed) as a, Node("b", team, config=peer) as b:
 
         async def forever() -> None:
             await asyncio.Event().wait()
 
         b.export(forever)
-        await a.team.wait_for({"b"}, timeout=10)
+        await a.membership.wait_for({"b"}, timeout=10)
         call = asyncio.create_task(a.call("b", "forever", timeout=None))
         await asyncio.sleep(0.2)
         await a.close()
@@ -76,11 +77,11 @@ async def test_pending_call_fails_when_the_caller_closes() -> None:
 
 async def test_subscription_iterates_and_closes() -> None:
     seed, peer = configs()
-    team = Team.generate("alpha")
+    team = TeamCredentials.generate("alpha")
     async with Node("a", team, config=seed) as a, Node("b", team, config=peer) as b:
         sub = b.subscribe("t/x")
         probe = b.subscribe("t/probe")  # declared after t/x: once a probe gets through, so will t/x
-        await a.team.wait_for({"b"}, timeout=10)
+        await a.membership.wait_for({"b"}, timeout=10)
         async with asyncio.timeout(10):
             while True:
                 await a.broadcast("t/probe", 0)

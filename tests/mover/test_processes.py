@@ -31,7 +31,7 @@ from mover import (
     PayloadTooLarge,
     RemoteError,
     RobotLost,
-    Team,
+    TeamCredentials,
     UnknownProcedure,
     UnknownRobot,
 )
@@ -57,7 +57,7 @@ async def world() -> AsyncIterator[tuple[Cluster, Node]]:
                 for name, (x, y, h) in POSITIONS.items()
             )
         )
-        await node.team.wait_for(POSITIONS, timeout=10)
+        await node.membership.wait_for(POSITIONS, timeout=10)
         yield c, node
 
 
@@ -66,7 +66,7 @@ async def test_rpc_across_processes(world: tuple[Cluster, Node]) -> None:
     assert await node.call("r1", "add", 2, 3, timeout=5) == 5
     # robot to robot, through a third process's request
     assert await node.call("r1", "call_other", "r2", "add", [40, 2], timeout=5) == 42
-    info = node.team.info("r2")
+    info = node.membership.info("r2")
     assert info is not None and info.kind == "robot" and info.uptime >= 0
 
 
@@ -176,13 +176,13 @@ async def test_range_limited_broadcast(world: tuple[Cluster, Node]) -> None:
 async def test_outsiders_are_refused(world: tuple[Cluster, Node]) -> None:
     c, node = world
     before = await node.call("r1", "bumps", timeout=5)
-    for team in (Team.generate("alpha"), Team.generate("beta")):
+    for team in (TeamCredentials.generate("alpha"), TeamCredentials.generate("beta")):
         await c.start("tests.helpers.outsider", "r1", team=team, ready="DONE")
     await asyncio.sleep(0.3)
     assert await node.call("r1", "bumps", timeout=5) == before  # nothing ran
     heard = await node.call("r1", "heard", "chatter", timeout=5)
     assert heard == []  # the injected broadcast was dropped
-    assert "outsider" not in node.team.members()
+    assert "outsider" not in node.membership.members()
 
 
 async def test_replayed_envelope_is_refused(world: tuple[Cluster, Node]) -> None:
@@ -246,7 +246,7 @@ async def test_sigkilled_member_is_seen_gone_and_its_call_fails(
 ) -> None:
     c, node = world
     proc = await c.robot("victim")
-    await node.team.wait_for({"victim"}, timeout=10)
+    await node.membership.wait_for({"victim"}, timeout=10)
     marker = tmp_path / "m"
     call = asyncio.create_task(node.call("victim", "hold", str(marker), timeout=None))
     await _until(lambda: marker.exists())
@@ -255,7 +255,7 @@ async def test_sigkilled_member_is_seen_gone_and_its_call_fails(
     with pytest.raises(RobotLost):
         await call
     failed = time.monotonic() - killed
-    await node.team.wait_gone("victim", timeout=1.0)
+    await node.membership.wait_gone("victim", timeout=1.0)
     gone = time.monotonic() - killed
     print(
         f"SIGKILL: call failed after {failed * 1000:.1f} ms, member gone after {gone * 1000:.1f} ms"
@@ -270,11 +270,11 @@ async def test_hung_member_is_seen_gone_within_about_a_second(
 ) -> None:
     c, node = world
     proc = await c.robot("sleeper")
-    await node.team.wait_for({"sleeper"}, timeout=10)
+    await node.membership.wait_for({"sleeper"}, timeout=10)
     stopped = time.monotonic()
     os.kill(proc.pid, signal.SIGSTOP)
     try:
-        await node.team.wait_gone("sleeper", timeout=3.0)
+        await node.membership.wait_gone("sleeper", timeout=3.0)
         print(f"SIGSTOP: member gone after {(time.monotonic() - stopped) * 1000:.0f} ms")
         assert time.monotonic() - stopped < 2.0
     finally:

@@ -13,7 +13,6 @@ import pytest
 
 import mover
 import mover.cli
-from mover import _deprecated
 
 pytestmark = pytest.mark.processes
 
@@ -66,32 +65,24 @@ DEPRECATED = {
 
 
 @pytest.mark.parametrize("name", sorted(DEPRECATED))
-def test_a_deprecated_name_warns_and_gives_what_it_gave(
-    name: str, monkeypatch: pytest.MonkeyPatch
-) -> None:
+def test_a_deprecated_name_warns_and_gives_what_it_gave(name: str) -> None:
     module, now = DEPRECATED[name]
     assert name not in mover.__all__ and name not in dir(mover)
-    monkeypatch.setattr(_deprecated, "UNSWEPT", frozenset())  # as once this repository is renamed
     with pytest.warns(DeprecationWarning, match=f"mover.{name} is deprecated"):
         found = getattr(mover, name)
     assert found is getattr(importlib.import_module(module), now)
 
 
-def test_a_name_still_used_here_is_served_silently_until_renamed() -> None:
+def test_every_deprecated_name_warns_none_is_served_silently() -> None:
     assert mover._DEPRECATED.keys() == DEPRECATED.keys()
-    assert {f"mover.{name}" for name in DEPRECATED} | {"Node.team"} >= _deprecated.UNSWEPT
     for name in DEPRECATED:
-        if f"mover.{name}" in _deprecated.UNSWEPT:
-            getattr(mover, name)  # no warning (it would be an error here)
-        else:
-            with pytest.warns(DeprecationWarning, match=f"mover.{name} is deprecated"):
-                getattr(mover, name)
+        with pytest.warns(DeprecationWarning, match=f"mover.{name} is deprecated"):
+            getattr(mover, name)
 
 
-def test_a_node_s_membership_was_its_team(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_a_node_s_membership_was_its_team() -> None:
     node = mover.Node("ada", mover.TeamCredentials.generate("crew"))  # not started
     assert isinstance(node.membership, mover.Membership)
-    monkeypatch.setattr(_deprecated, "UNSWEPT", frozenset())
     with pytest.warns(DeprecationWarning, match="Node.team is deprecated"):
         assert node.team is node.membership
     with pytest.raises(AttributeError, match="no attribute 'Nothing'"):

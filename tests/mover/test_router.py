@@ -9,8 +9,8 @@ from pathlib import Path
 import pytest
 import zenoh
 
-from mover import Node, NodeConfig, Team, free_port
-from mover._config import _read_overrides
+from mover import Node, NodeConfig, TeamCredentials
+from mover._config import _read_overrides, free_port
 from mover.cli._router import generate_config
 
 pytestmark = pytest.mark.processes
@@ -34,7 +34,7 @@ async def test_members_talk_through_a_secured_router_and_outsiders_cannot_connec
         assert router.stdout is not None
         line = await asyncio.wait_for(router.stdout.readline(), 20)
         assert line.startswith(b"router ")
-        team = Team.generate("alpha")
+        team = TeamCredentials.generate("alpha")
 
         def member(name: str) -> NodeConfig:
             return NodeConfig(
@@ -48,7 +48,7 @@ async def test_members_talk_through_a_secured_router_and_outsiders_cannot_connec
             Node("b", team, config=member("b")) as b,
         ):
             b.export(lambda x: 2 * x, "double")
-            await a.team.wait_for({"a", "b"}, timeout=10)
+            await a.membership.wait_for({"a", "b"}, timeout=10)
             assert await a.call("b", "double", 21, timeout=5) == 42
         outsider = NodeConfig(mode="client", listen=(), connect=(f"tls/127.0.0.1:{port}",))
         with pytest.raises(zenoh.ZError):

@@ -18,7 +18,7 @@ from typing import Any
 
 import pytest
 
-from mover import BadArguments, Node, Refused, TaskTeam, launch
+from mover import BadArguments, Node, Refused, RunTeam, launch
 from mover._collective import seed_of
 from mover._programs import outcomes
 from tests.helpers.procs import ROOT, Cluster, cluster
@@ -30,7 +30,7 @@ MEMBER = "tests.mover._run_member"
 
 async def start_members(c: Cluster, node: Node, names: list[str]) -> None:
     await asyncio.gather(*(c.start(MEMBER, n) for n in names))
-    await node.team.wait_for(names, timeout=30)
+    await node.membership.wait_for(names, timeout=30)
 
 
 async def mover(c: Cluster, tmp: Path, *args: str, bound: float = 40.0) -> tuple[int, str, str]:
@@ -63,13 +63,13 @@ async def wait_phase(node: Node, member: str, run: str, phase: str) -> None:
 # -- seeds (no network) ---------------------------------------------------------------------------
 
 
-def _team(me: str, run: str, seed: int | None = None) -> TaskTeam:
+def _team(me: str, run: str, seed: int | None = None) -> RunTeam:
     node: Any = SimpleNamespace(name=me)
-    return TaskTeam(node, run, ["a", "b"], collectives=object(), seed=seed)  # type: ignore[arg-type]
+    return RunTeam(node, run, ["a", "b"], collectives=object(), seed=seed)  # type: ignore[arg-type]
 
 
 def test_the_rng_depends_on_seed_member_and_stream_not_on_the_run_name() -> None:
-    def draws(t: TaskTeam, stream: str = "") -> list[float]:
+    def draws(t: RunTeam, stream: str = "") -> list[float]:
         rng = t.rng(stream)
         return [rng.random() for _ in range(5)]
 
@@ -200,7 +200,7 @@ async def test_mover_run_warns_when_the_team_changed(tmp_path: Path) -> None:
         assert code == 0 and "warning" not in err  # the same team
         await start_members(c, node, ["c"])
         c.procs[0].kill()  # a leaves
-        await node.team.wait_gone("a", timeout=10)
+        await node.membership.wait_gone("a", timeout=10)
         code, out, err = await mover(c, tmp_path, *args)
         print(f"\n$ mover run pause (a gone, c new)\n{out}{err}")
         assert code == 0, out + err
@@ -265,7 +265,8 @@ class CountingClock:
 
 
 async def test_the_host_engages_its_clock_per_run_and_releases_it_after_the_last() -> None:
-    from mover import NodeConfig, ProgramHost, RunTeam, Team, free_port
+    from mover import NodeConfig, ProgramHost, TeamCredentials
+    from mover._config import free_port
 
     gate = asyncio.Event()
 
@@ -279,7 +280,7 @@ async def test_the_host_engages_its_clock_per_run_and_releases_it_after_the_last
 
     port = free_port()
     async with Node(
-        "h", Team.generate("t"), config=NodeConfig(listen=(f"tcp/127.0.0.1:{port}",))
+        "h", TeamCredentials.generate("t"), config=NodeConfig(listen=(f"tcp/127.0.0.1:{port}",))
     ) as node:
         host = ProgramHost(node, {"wait_gate": wait_gate, "fail": fail}, robot=None)
         clock = host.clock = CountingClock()

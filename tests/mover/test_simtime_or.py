@@ -12,7 +12,7 @@ from collections.abc import AsyncIterator, Awaitable, Callable, Mapping
 
 import pytest
 
-from mover import MemberLost, Node, Outcome, TaskTeam
+from mover import MemberLost, Node, Outcome, RunTeam
 
 DT = 0.1  # simulated seconds per tick
 
@@ -91,12 +91,12 @@ class FakeClock:
 
 def timed_teams(
     nodes: list[Node], world: FakeWorld, run: str, *, clocks: bool = True, **kw: object
-) -> tuple[list[TaskTeam], dict[str, FakeClock]]:
+) -> tuple[list[RunTeam], dict[str, FakeClock]]:
     names = [n.name for n in nodes]
     fake = {n.name: FakeClock(world, n.name) for n in nodes}
     world.engaged = set(names)  # every run engages its clock before it begins
     teams = [
-        TaskTeam(n, run, names, clock=fake[n.name] if clocks else None, **kw)  # type: ignore[arg-type]
+        RunTeam(n, run, names, clock=fake[n.name] if clocks else None, **kw)  # type: ignore[arg-type]
         for n in nodes
     ]
     return teams, fake
@@ -131,7 +131,7 @@ def walker(
 
 
 async def run_or(
-    teams: list[TaskTeam], ops: Mapping[str, Callable[[], Awaitable[str]]]
+    teams: list[RunTeam], ops: Mapping[str, Callable[[], Awaitable[str]]]
 ) -> list[Outcome]:
     return await asyncio.wait_for(
         asyncio.gather(*(t.distributed_or(ops[t.me]) for t in teams)),

@@ -8,12 +8,12 @@ from collections.abc import Awaitable, Callable
 
 import pytest
 
-from mover import MemberLost, Node, OperationFailed, TaskTeam
+from mover import MemberLost, Node, OperationFailed, RunTeam
 
 
-def teams(nodes: list[Node], run: str = "r", **kw: object) -> list[TaskTeam]:
+def teams(nodes: list[Node], run: str = "r", **kw: object) -> list[RunTeam]:
     names = [n.name for n in nodes]
-    return [TaskTeam(n, run, names, **kw) for n in nodes]  # type: ignore[arg-type]
+    return [RunTeam(n, run, names, **kw) for n in nodes]  # type: ignore[arg-type]
 
 
 async def test_or_first_finisher_wins_and_losers_clean_up(nodes: list[Node]) -> None:
@@ -42,7 +42,7 @@ async def test_or_ties_agree(nodes: list[Node]) -> None:
     ts = teams(nodes)
     for _ in range(20):
 
-        async def now(t: TaskTeam) -> str:
+        async def now(t: RunTeam) -> str:
             return t.me
 
         outs = await asyncio.gather(*(t.distributed_or(functools.partial(now, t)) for t in ts))
@@ -53,7 +53,7 @@ async def test_and_gives_everyone_all_results_both_variants(nodes: list[Node]) -
     ts = teams(nodes)
     for designated in (True, False):
 
-        async def op(t: TaskTeam) -> int:
+        async def op(t: RunTeam) -> int:
             await asyncio.sleep(0.01 * int(t.me[1:]))
             return int(t.me[1:]) ** 2
 
@@ -71,7 +71,7 @@ async def test_and_gives_everyone_all_results_both_variants(nodes: list[Node]) -
 async def test_and_reports_failed_operations(nodes: list[Node]) -> None:
     ts = teams(nodes)
 
-    async def op(t: TaskTeam) -> str:
+    async def op(t: RunTeam) -> str:
         if t.me == "n3":
             raise RuntimeError("stuck")
         return "ok"
@@ -86,7 +86,7 @@ async def test_and_reports_failed_operations(nodes: list[Node]) -> None:
 async def test_continuation_gets_the_outcome(nodes: list[Node]) -> None:
     ts = teams(nodes)
 
-    async def op(t: TaskTeam) -> int:
+    async def op(t: RunTeam) -> int:
         await asyncio.sleep(0 if t.me == "n4" else 5)
         return 7
 
@@ -103,7 +103,7 @@ async def test_a_member_leaving_during_and_fails_the_step_or_is_survived(
 ) -> None:
     ts = teams(nodes[:4], policy=policy)
 
-    async def op(t: TaskTeam) -> str:
+    async def op(t: RunTeam) -> str:
         await asyncio.sleep(3600 if t.me == "n3" else 0.01)  # n3 never finishes
         return t.me
 
@@ -127,7 +127,7 @@ async def test_a_run_of_its_own_policy_survives_on_a_node_that_fails_by_default(
     for t in ts:
         t.collectives.set_policy("own", "survivors")  # as mover.start sets a launch's policy
 
-    async def op(t: TaskTeam) -> str:
+    async def op(t: RunTeam) -> str:
         await asyncio.sleep(3600 if t.me == "n2" else 0.01)
         return t.me
 
@@ -143,7 +143,7 @@ async def test_a_long_or_step_costs_2n_messages(nodes: list[Node]) -> None:
     """Members that ask for the decision get it in the answer: no announcement is sent."""
     ts = teams(nodes)
 
-    async def op(t: TaskTeam) -> str:
+    async def op(t: RunTeam) -> str:
         await asyncio.sleep(0.5 if t.me == "n3" else 5.0)  # longer than POLL_AFTER
         return t.me
 
@@ -160,7 +160,7 @@ async def test_a_designated_member_without_collectives_fails_the_step_clearly(
     from mover import UnknownProcedure
 
     plain, member = nodes[0], nodes[1]  # the first by name is designated, and serves nothing
-    team = TaskTeam(member, "r", [plain.name, member.name])
+    team = RunTeam(member, "r", [plain.name, member.name])
     before = plain.stats["recv.call"]
 
     async def op() -> str:
@@ -232,8 +232,8 @@ async def test_a_successor_that_heard_the_decision_hands_it_on(nodes: list[Node]
     heard = Decision("won", winner="n3", result=7)
     successor.learned("r", 1, heard)  # as if its listener heard n0's broadcast
     await n0.close()
-    await n1.team.wait_gone("n0", timeout=10)
-    await n2.team.wait_gone("n0", timeout=10)
+    await n1.membership.wait_gone("n0", timeout=10)
+    await n2.membership.wait_gone("n0", timeout=10)
     answer = await n2.call("n1", "mover.or_join", "r", 1, "n2", members, timeout=3)
     assert Decision.from_wire(answer) == heard
 
@@ -257,21 +257,21 @@ async def test_the_designated_member_killed_right_after_it_announced(
         await asyncio.sleep(30)
         return "late"
 
-    t0 = TaskTeam(n0, "r", members)
+    t0 = RunTeam(n0, "r", members)
     if successor_learns == "heard":
-        t1 = TaskTeam(n1, "r", members)
+        t1 = RunTeam(n1, "r", members)
         first, second = await asyncio.gather(
             t0.distributed_or(at_once), asyncio.wait_for(t1.distributed_or(long), 10)
         )
     else:
         first = await t0.distributed_or(at_once)
-        t1 = TaskTeam(n1, "r", members)  # too late to hear the announcement: it asks n0
+        t1 = RunTeam(n1, "r", members)  # too late to hear the announcement: it asks n0
         second = await asyncio.wait_for(t1.distributed_or(long), 10)
     assert first.winner == second.winner == "n0"
     await n0.close()  # right after its announcement
-    await n1.team.wait_gone("n0", timeout=10)
-    await n2.team.wait_gone("n0", timeout=10)
-    t2 = TaskTeam(n2, "r", members)  # its listener starts now: the announcement is past
+    await n1.membership.wait_gone("n0", timeout=10)
+    await n2.membership.wait_gone("n0", timeout=10)
+    t2 = RunTeam(n2, "r", members)  # its listener starts now: the announcement is past
     late = await asyncio.wait_for(t2.distributed_or(long), 10)
     assert (late.winner, late.result) == ("n0", "n0's")
 

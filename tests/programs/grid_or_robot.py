@@ -11,7 +11,7 @@ import asyncio
 import logging
 import sys
 
-from mover import NodeConfig, RunTeam, Team
+from mover import NodeConfig, RunTeam, TeamCredentials
 from robots import Robot
 from robots.grid_hal import GridHardware
 from robots.process import run_robot
@@ -37,7 +37,7 @@ def main() -> None:
     asyncio.run(
         run_robot(
             sys.argv[1],
-            team=Team.from_env(),
+            team=TeamCredentials.from_env(),
             config=NodeConfig.from_env(),
             hardware="grid",
             options={"world": "gridworld", "idle_period": 0.0},

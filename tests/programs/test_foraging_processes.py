@@ -35,7 +35,7 @@ async def test_four_robot_processes_forage_to_completion(tmp_path: Path) -> None
     async with cluster() as c, Node("launcher", c.team, kind="tool", config=c.seed) as node:
         await start_world(c, path, "--expect", "4", "--until", "delivered")
         await start_robots(c, names, [{"view": 0}] * 4)
-        await node.team.wait_for([WORLD, *names], timeout=20)
+        await node.membership.wait_for([WORLD, *names], timeout=20)
         t0 = time.monotonic()
         outcomes = await asyncio.wait_for(
             launch(node, "foraging", names, {"method": "cmarking", "seed": 3}, run="forage"), 90
@@ -72,7 +72,7 @@ async def test_sequential_turns_repeat_the_in_process_run_across_processes(tmp_p
     async with cluster() as c, Node("launcher", c.team, kind="tool", config=c.seed) as node:
         await start_world(c, path, "--expect", "4", "--turns", "sequential")
         await start_robots(c, names, [{"view": 0}] * 4)
-        await node.team.wait_for([WORLD, *names], timeout=20)
+        await node.membership.wait_for([WORLD, *names], timeout=20)
         outcomes = await asyncio.wait_for(
             launch(
                 node,

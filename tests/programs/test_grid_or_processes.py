@@ -25,7 +25,7 @@ async def test_a_grid_team_decides_an_or_in_rounds_over_processes(tmp_path: Path
         await asyncio.gather(
             *(c.start("tests.programs.grid_or_robot", n, timeout=40.0) for n in names)
         )
-        await node.team.wait_for([WORLD, *names], timeout=20)
+        await node.membership.wait_for([WORLD, *names], timeout=20)
         ends = {"a": 6, "b": 3}
         outcomes = await asyncio.wait_for(
             launch(node, "or_rounds", names, {"ends": ends}, run="or-in-rounds"), 60

@@ -22,7 +22,7 @@ async def test_two_robots_join_tick_and_forage(tmp_path: Path) -> None:
     async with cluster() as c, Node("launcher", c.team, kind="tool", config=c.seed) as node:
         await start_world(c, path, "--expect", "2")
         await start_robots(c, names, [{"view": 0}, {"view": 0}])
-        await node.team.wait_for([WORLD, *names], timeout=20)
+        await node.membership.wait_for([WORLD, *names], timeout=20)
         async with asyncio.timeout(10):
             while (idle := await node.call(WORLD, "state", timeout=5))["idle"] != names:
                 await asyncio.sleep(0.05)

@@ -35,7 +35,7 @@ async def _run_and_stop_one(tmp_path: Path, sig: signal.Signals, timeout: str) -
     async with cluster() as c, Node("launcher", c.team, kind="tool", config=c.seed) as node:
         await start_world(c, field(tmp_path), "--expect", "4", "--timeout", timeout)
         procs = await start_robots(c, NAMES, [{"view": 0}] * 4)
-        await node.team.wait_for([WORLD, *NAMES], timeout=20)
+        await node.membership.wait_for([WORLD, *NAMES], timeout=20)
         run = asyncio.ensure_future(launch(node, "foraging", NAMES, {"seed": 5}, run="kill"))
         async with asyncio.timeout(30):  # until the run is under way: the victim has moved
             while (await node.call(WORLD, "state", timeout=5))["moves"].get("k1", 0) < 5:
@@ -82,7 +82,7 @@ async def test_maze_survivors_finish_without_a_killed_member(tmp_path: Path) -> 
     async with cluster() as c, Node("launcher", c.team, kind="tool", config=c.seed) as node:
         await start_world(c, tmp_path / "maze.json", "--expect", "4")
         procs = await start_robots(c, names, [{"start": s} for s in starts])
-        await node.team.wait_for([WORLD, *names], timeout=20)
+        await node.membership.wait_for([WORLD, *names], timeout=20)
         run = asyncio.ensure_future(
             launch(
                 node,

@@ -42,7 +42,7 @@ async def distributed(
     async with cluster() as c, c.launcher() as node:
         await c.world(str(path), expect=robots)
         await c.robots(*names)
-        await node.team.wait_for(["world", *names], timeout=60)
+        await node.membership.wait_for(["world", *names], timeout=60)
         args = {"method": method, "targets": targets, "seed": seed, "max_time": SETUP.max_time}
         t0 = time.monotonic()
         outcomes = await asyncio.wait_for(launch(node, "levy_search", names, args, run="levy"), 500)

@@ -32,7 +32,7 @@ async def test_distributed_maze_run_matches_the_in_process_run(tmp_path: Path) -
     async with cluster() as c, Node("launcher", c.team, kind="tool", config=c.seed) as node:
         await start_world(c, path, "--expect", "4")
         await start_robots(c, names, [{"start": s, "view": 2} for s in starts])
-        await node.team.wait_for([WORLD, *names], timeout=20)
+        await node.membership.wait_for([WORLD, *names], timeout=20)
         t0 = time.monotonic()
         outcomes = await asyncio.wait_for(
             launch(

@@ -20,8 +20,8 @@ async def test_robot_and_workstation_run_a_program_together() -> None:
         await c.world(str(ROOT / "worlds" / "search_and_rescue.toml"), expect=2)
         await c.robots("ernst", "moseley")
         await c.start("robots", "--name", "desk", "--hardware", "none", "--kind", "workstation")
-        await node.team.wait_for(["world", "ernst", "moseley", "desk"], timeout=30)
-        assert node.team.info("desk").kind == "workstation"  # type: ignore[union-attr]
+        await node.membership.wait_for(["world", "ernst", "moseley", "desk"], timeout=30)
+        assert node.membership.info("desk").kind == "workstation"  # type: ignore[union-attr]
         pose = await node.call("ernst", "robot.pose", timeout=10)
         assert pose[:2] == pytest.approx([0.8, 3.0], abs=0.05)
         outcomes = await launch(node, "hello_team", ["desk", "ernst", "moseley"], {}, run="hi")

@@ -124,7 +124,7 @@ async def test_a_foot_bot_and_an_eye_bot_killed_mid_run_are_left_out(
             await asyncio.sleep(0.1)
     victims = sorted([feet[1], eyes[4]])
     for victim in victims:
-        info = up.node.team.info(victim)
+        info = up.node.membership.info(victim)
         assert info is not None
         os.kill(info.pid, signal.SIGKILL)
     outcomes = await asyncio.wait_for(running, 120)

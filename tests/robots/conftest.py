@@ -11,7 +11,8 @@ from typing import Any
 import pytest
 import pytest_asyncio
 
-from mover import Node, NodeConfig, Team, free_port
+from mover import Node, NodeConfig, TeamCredentials
+from mover._config import free_port
 from robots import Robot
 from sim_hw import World, WorldServer, WorldSpec, in_process, load_world
 
@@ -65,7 +66,7 @@ async def together(
 async def mesh() -> AsyncIterator[Mesh]:
     """Make nodes of one team over zenoh on loopback (no scouting), all in this process."""
     async with AsyncExitStack() as stack:
-        team = Team.generate("rescue")
+        team = TeamCredentials.generate("rescue")
 
         async def make(names: Sequence[str]) -> list[Node]:
             port = free_port()
@@ -80,7 +81,7 @@ async def mesh() -> AsyncIterator[Mesh]:
                     )
                 )
             for n in out:
-                await n.team.wait_for(set(names), timeout=10)
+                await n.membership.wait_for(set(names), timeout=10)
             return out
 
         yield make

@@ -13,7 +13,7 @@ import sys
 import time
 from typing import Any
 
-from mover import NodeConfig, Team
+from mover import NodeConfig, TeamCredentials
 from robots.process import run_robot
 
 
@@ -40,7 +40,7 @@ def main() -> None:
     asyncio.run(
         run_robot(
             sys.argv[1],
-            team=Team.from_env(),
+            team=TeamCredentials.from_env(),
             config=NodeConfig.from_env(),
             programs={"walk": walk},
             ready=lambda: print("READY", flush=True),

@@ -32,7 +32,7 @@ async def test_a_duplicate_robot_or_world_name_is_refused() -> None:
     async with cluster(cwd=ROOT) as c, c.launcher() as node:
         first = await c.start("robots", "--name", "r1", "--hardware", "none")
         await c.start("mover._cli", "world", WORLD, "--name", "w1", ready=None)
-        await node.team.wait_for({"r1", "w1"}, timeout=20)
+        await node.membership.wait_for({"r1", "w1"}, timeout=20)
         env = {**os.environ, **c.env, **c.team.env(), **c.peer.env()}
         code, text = await _second(env, "-m", "robots", "--name", "r1", "--hardware", "none")
         assert code == 2 and "Traceback" not in text
@@ -41,6 +41,6 @@ async def test_a_duplicate_robot_or_world_name_is_refused() -> None:
         code, text = await _second(env, "-m", "mover._cli", "world", WORLD, "--name", "w1")
         assert code == 2 and "Traceback" not in text and "the name 'w1' is taken" in text, text
         # the holders are unaffected
-        assert "r1" in node.team and "w1" in node.team
-        info = node.team.info("r1")
+        assert "r1" in node.membership and "w1" in node.membership
+        info = node.membership.info("r1")
         assert info is not None and info.pid == first.pid

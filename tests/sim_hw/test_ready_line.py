@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
-from mover import NodeConfig, Team
+from mover import NodeConfig, TeamCredentials
 from sim_hw._process import ready_line
 
-TEAM = Team("lab", bytes(32))
+TEAM = TeamCredentials("lab", bytes(32))
 
 
 def test_a_free_port_is_not_shown_the_endpoints_it_connects_to_are() -> None:

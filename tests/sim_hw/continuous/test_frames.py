@@ -11,7 +11,8 @@ import contextlib
 from collections.abc import AsyncIterator
 from typing import Any
 
-from mover import Node, NodeConfig, Team, free_port
+from mover import Node, NodeConfig, TeamCredentials
+from mover._config import free_port
 from sim_hw import World, WorldServer, random_obstacles, remote
 from sim_hw._frames import topics as frame_topics
 from sim_hw._process import serve
@@ -23,13 +24,13 @@ async def _team(expect: int, *names: str, frames: bool = True) -> AsyncIterator[
     port = free_port()
     seed = NodeConfig(listen=(f"tcp/127.0.0.1:{port}",))
     peer = NodeConfig(connect=(f"tcp/127.0.0.1:{port}",))
-    team = Team.generate("frames")
+    team = TeamCredentials.generate("frames")
     server = WorldServer(World(random_obstacles((6.0, 6.0), 0)), expect=expect)
     async with contextlib.AsyncExitStack() as stack:
         world = await stack.enter_async_context(Node("world", team, kind="world", config=seed))
         nodes = [await stack.enter_async_context(Node(n, team, config=peer)) for n in names]
         serve(world, server, frames=frames)
-        await world.team.wait_for({"world", *names}, timeout=10)
+        await world.membership.wait_for({"world", *names}, timeout=10)
         yield [server, world, *nodes]
 
 

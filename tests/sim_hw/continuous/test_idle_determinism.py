@@ -16,7 +16,8 @@ from typing import Any
 import numpy as np
 import pytest
 
-from mover import Node, NodeConfig, Team, free_port
+from mover import Node, NodeConfig, TeamCredentials
+from mover._config import free_port
 from sim_hw import World, WorldServer, in_process, random_obstacles, remote
 from sim_hw._process import serve
 
@@ -42,12 +43,12 @@ async def _robots(server: WorldServer, how: str) -> AsyncIterator[tuple[Any, Any
     port = free_port()
     seed = NodeConfig(listen=(f"tcp/127.0.0.1:{port}",))
     peer = NodeConfig(connect=(f"tcp/127.0.0.1:{port}",))
-    team = Team.generate("idle")
+    team = TeamCredentials.generate("idle")
     async with contextlib.AsyncExitStack() as stack:
         world = await stack.enter_async_context(Node("world", team, kind="world", config=seed))
         a, b = [await stack.enter_async_context(Node(n, team, config=peer)) for n in "ab"]
         serve(world, server)
-        await world.team.wait_for({"world", "a", "b"}, timeout=10)
+        await world.membership.wait_for({"world", "a", "b"}, timeout=10)
         yield await asyncio.gather(remote(a, "a", NOISY), remote(b, "b", NOISY))
 
 

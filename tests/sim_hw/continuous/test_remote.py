@@ -18,8 +18,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mover import Node, NodeConfig, Team, free_port
+from mover import Node, NodeConfig, TeamCredentials
 from mover._cli import main
+from mover._config import free_port
 from sim_hw import World, WorldServer, in_process, load_world, read_recording
 from sim_hw.continuous._walker import random_walk
 
@@ -40,7 +41,7 @@ class Procs:
     """Processes of one test on one seed port; all killed at the end."""
 
     def __init__(self) -> None:
-        self.team = Team.generate("simtest")
+        self.team = TeamCredentials.generate("simtest")
         self.port = free_port()
         self.procs: list[asyncio.subprocess.Process] = []
 
@@ -172,7 +173,7 @@ async def test_the_world_streams_snapshots(procs: Procs, tmp_path: Path) -> None
     config = NodeConfig(connect=(f"tcp/127.0.0.1:{procs.port}",))
     async with Node("watcher", team=procs.team, kind="test", config=config) as node:
         sub = node.subscribe("world/state")
-        await node.team.wait_for(["world"], timeout=20)
+        await node.membership.wait_for(["world"], timeout=20)
         msg = await sub.get(timeout=20)
         assert msg.sender == "world"
         assert set(msg.data) >= {"tick", "t", "robots", "boxes"}

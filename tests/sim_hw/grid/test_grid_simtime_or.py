@@ -11,7 +11,8 @@ from contextlib import AsyncExitStack
 import numpy as np
 import pytest_asyncio
 
-from mover import Node, NodeConfig, Outcome, TaskTeam, Team, free_port
+from mover import Node, NodeConfig, Outcome, TaskTeam, TeamCredentials
+from mover._config import free_port
 from robots.grid_hal import GridHardware
 from robots.hal import HardwareLost
 from robots.process import HostClock
@@ -23,7 +24,7 @@ NAMES = ("a", "b", "c")
 @pytest_asyncio.fixture
 async def nodes() -> AsyncIterator[list[Node]]:
     """One node per robot, in one team over zenoh on loopback."""
-    team = Team.generate("grid")
+    team = TeamCredentials.generate("grid")
     port = free_port()
     async with AsyncExitStack() as stack:
         out = [
@@ -39,7 +40,7 @@ async def nodes() -> AsyncIterator[list[Node]]:
             for i, name in enumerate(NAMES)
         ]
         for node in out:
-            await node.team.wait_for(set(NAMES), timeout=10)
+            await node.membership.wait_for(set(NAMES), timeout=10)
         yield out
 
 
