@@ -129,7 +129,7 @@ class ProgramHost:
         self,
         node: Node,
         programs: Mapping[str, Callable[..., Any]],
-        robot: Any,
+        robot: object,
         *,
         policy: Policy = "fail",
         join_timeout: float = 10.0,

@@ -24,11 +24,14 @@ import asyncio
 import json
 import logging
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from mover import NameTaken
 from mover.cli import UsageError, json_object
 from sim_hw._process import add_world_arguments, count
+
+if TYPE_CHECKING:
+    from ._server import GridServer
 
 log = logging.getLogger("sim_hw.grid.cli")
 
@@ -175,7 +178,7 @@ def _cells(layout: dict[str, Any]) -> Any:
     return cell
 
 
-def _write_snapshot(server: Any, where: Path) -> None:
+def _write_snapshot(server: GridServer, where: Path) -> None:
     where.mkdir(parents=True, exist_ok=True)
     (where / f"round-{server.round:06d}.txt").write_text(server.snapshot_text())
 

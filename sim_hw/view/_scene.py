@@ -18,7 +18,12 @@ nothing until a viewer calls them.
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any, Protocol
+
+if TYPE_CHECKING:
+    from sim_hw._lockstep import LockstepDoor
+    from sim_hw.grid._server import GridStepper
 
 SCENE = "view.scene"
 """The procedure that answers a world's static scene."""
@@ -27,7 +32,13 @@ FRAME = "view.frame"
 """The procedure that answers a grid world's state now."""
 
 
-def export_scene(node: Any, door: Any) -> None:
+class Exports(Protocol):
+    """What :func:`export_scene` needs of a node: to export a procedure by name."""
+
+    def export(self, fn: Callable[..., Any], name: str | None = None) -> object: ...
+
+
+def export_scene(node: Exports, door: LockstepDoor[Any]) -> None:
     """Export :data:`SCENE` (and, for a grid world, :data:`FRAME`) for ``door``'s world."""
     stepper = door.stepper
     if hasattr(stepper, "bots"):  # the grid world (sim_hw.grid._server.GridStepper)
@@ -49,7 +60,7 @@ def export_scene(node: Any, door: Any) -> None:
     node.export(scene, name=SCENE)
 
 
-def grid_header(stepper: Any) -> dict[str, Any]:
+def grid_header(stepper: GridStepper) -> dict[str, Any]:
     """A grid world's static scene (see the module)."""
     grid, world = stepper.grid, stepper.world
     rows = ["".join("#" if o else "." for o in row) for row in grid.obstacles.tolist()]
@@ -63,7 +74,7 @@ def grid_header(stepper: Any) -> dict[str, Any]:
     }
 
 
-def grid_state(stepper: Any) -> dict[str, Any]:
+def grid_state(stepper: GridStepper) -> dict[str, Any]:
     """A grid world's state now (see the module)."""
     grid, world = stepper.grid, stepper.world
     return {

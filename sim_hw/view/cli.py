@@ -18,7 +18,10 @@ import sys
 import time
 from collections.abc import Coroutine
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from ._server import ViewerServer
 
 from mover.cli import (
     UsageError,
@@ -105,7 +108,7 @@ def run_view(args: argparse.Namespace) -> int:
     return 0
 
 
-async def _watch(main: Coroutine[Any, Any, None], server: Any) -> bool:
+async def _watch(main: Coroutine[Any, Any, None], server: ViewerServer) -> bool:
     """Run ``main`` until it ends, SIGTERM comes or the server stops; whether it still runs."""
     task = asyncio.ensure_future(main)
     asyncio.get_running_loop().add_signal_handler(signal.SIGTERM, task.cancel)
