@@ -82,7 +82,7 @@ async def test_a_silent_robot_is_dropped_after_the_timeout(
 
 
 class _Bus:
-    """In-process stand-ins for the node's broadcast, subscriptions and team view."""
+    """In-process stand-ins for the node's broadcast, subscriptions and membership view."""
 
     def __init__(self, names: list[str]) -> None:
         self.queues: dict[str, asyncio.Queue[Message]] = {n: asyncio.Queue() for n in names}
@@ -93,7 +93,7 @@ class _Bus:
 
 class _Node:
     def __init__(self, bus: _Bus, name: str) -> None:
-        self.bus, self.name, self.team = bus, name, set(bus.members)
+        self.bus, self.name, self.membership = bus, name, set(bus.members)
 
     def subscribe(self, topic: str) -> Any:
         queue = self.bus.queues[self.name]
