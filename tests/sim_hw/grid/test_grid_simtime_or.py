@@ -11,7 +11,7 @@ from contextlib import AsyncExitStack
 import numpy as np
 import pytest_asyncio
 
-from mover import Node, NodeConfig, Outcome, TaskTeam, TeamCredentials
+from mover import Node, NodeConfig, Outcome, RunTeam, TeamCredentials
 from mover._config import free_port
 from robots.grid_hal import GridHardware
 from robots.hal import HardwareLost
@@ -69,7 +69,7 @@ async def test_a_grid_team_decides_its_or_in_rounds_and_goes_on(nodes: list[Node
     lost: asyncio.Future[HardwareLost] = asyncio.get_running_loop().create_future()
     clocks = [HostClock(hw, lost) for hw in hws]
     teams = [
-        TaskTeam(node, "or-in-rounds", NAMES, clock=clock)
+        RunTeam(node, "or-in-rounds", NAMES, clock=clock)
         for node, clock in zip(nodes, clocks, strict=True)
     ]
     try:
