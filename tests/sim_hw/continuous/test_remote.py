@@ -22,10 +22,10 @@ from mover import Node, NodeConfig, Team, free_port
 from mover._cli import main
 from sim_hw import World, WorldServer, in_process, load_world, read_recording
 from sim_hw.continuous._walker import random_walk
+from tests.helpers.procs import ROOT
 
 pytestmark = [pytest.mark.processes, pytest.mark.timeout(90)]
 
-ROOT = Path(__file__).resolve().parents[3]
 WORLD = """
 [generator]
 kind = "random_obstacles"
