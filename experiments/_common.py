@@ -80,6 +80,21 @@ def comma_list(
     return parse
 
 
+ListOption = tuple[str, Callable[[str], Sequence[object]], Iterable[object], str]
+"""A comma-list option: its flag, its :func:`comma_list` type, its default and its help."""
+
+
+def add_list_arguments(parser: argparse.ArgumentParser, *options: ListOption) -> None:
+    """Add comma-list options to ``parser``, in the order given (each default a fresh list)."""
+    for flag, parse, default, what in options:
+        parser.add_argument(flag, type=parse, default=list(default), help=what)
+
+
+def shown(default: Iterable[float]) -> str:
+    """``(default 1,2,4)``: a comma-list option's default as its help shows it."""
+    return f"(default {','.join(f'{v:g}' for v in default)})"
+
+
 class Progress:
     """Progress on stderr: on a terminal, a bar on one line (``label [####....] done/total eta
     status``) redrawn at most twice a second; elsewhere (a log file, CI) plain lines, one at

@@ -110,14 +110,9 @@ class Cluster:
         self._watchers.append(asyncio.get_running_loop().create_task(self._watch(child)))
         if ready is None:
             return proc
-        assert proc.stdout is not None
-        async with asyncio.timeout(timeout):
-            while True:
-                line = (await proc.stdout.readline()).decode()
-                if not line:
-                    raise RuntimeError(f"{module} {' '.join(args)} exited before it was ready")
-                if line.startswith(ready):
-                    return proc
+        if await first_line(proc, lambda line: line.startswith(ready), timeout) is None:
+            raise RuntimeError(f"{module} {' '.join(args)} exited before it was ready")
+        return proc
 
     async def world(
         self, worldfile: str, *args: str, expect: int = 0
@@ -182,6 +177,19 @@ class Cluster:
         for task in self._watchers:
             task.cancel()
         await asyncio.gather(*self._watchers, return_exceptions=True)
+
+
+async def first_line(
+    proc: asyncio.subprocess.Process, wanted: Callable[[str], bool], timeout: float
+) -> str | None:
+    """The first line of ``proc``'s output (piped) for which ``wanted`` is true, the lines before
+    it skipped; None if the output ends first. Raises TimeoutError after ``timeout`` seconds."""
+    assert proc.stdout is not None
+    async with asyncio.timeout(timeout):
+        while line := (await proc.stdout.readline()).decode():
+            if wanted(line):
+                return line
+    return None
 
 
 def _file_name(label: str) -> str:

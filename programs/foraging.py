@@ -24,7 +24,7 @@ from robots.foraging import (
     Neighbour,
     Perception,
 )
-from robots.grid_hal import OBSTACLE, GridHardware
+from robots.grid_hal import OBSTACLE, GridHardware, Near
 
 #: Rounds between the agreed start and the latest member's round when the team agreed on it.
 START_LEAD = 50
@@ -51,33 +51,20 @@ def member_index(robot: Any, team: Any) -> int:
 def perception(hw: GridHardware) -> Perception:
     """The marking agents' perception: the cell here and the free 4-neighbours."""
     h = hw.senses.here()
-    return Perception(
-        h.value,
-        h.colour,
-        h.resource,
-        h.base,
-        tuple(
-            Neighbour(n.direction, n.value, n.colour, n.resource, n.base)
-            for n in hw.senses.around()
-            if n.state != OBSTACLE and n.direction < 4
-        ),
-    )
+    near = tuple(Neighbour(n.direction, n.value, n.colour, n.resource, n.base) for n in _free(hw))
+    return Perception(h.value, h.colour, h.resource, h.base, near)
 
 
 def ant_perception(hw: GridHardware) -> AntPerception:
     """The ants' perception: pheromone here and around, resources, the nest compass."""
     h = hw.senses.here()
-    return AntPerception(
-        h.pheromone,
-        h.resource,
-        h.base,
-        tuple(
-            AntNeighbour(n.direction, n.pheromone, n.resource, n.base)
-            for n in hw.senses.around()
-            if n.state != OBSTACLE and n.direction < 4
-        ),
-        hw.senses.compass(),
-    )
+    near = tuple(AntNeighbour(n.direction, n.pheromone, n.resource, n.base) for n in _free(hw))
+    return AntPerception(h.pheromone, h.resource, h.base, near, hw.senses.compass())
+
+
+def _free(hw: GridHardware) -> list[Near]:
+    """The readings of the free 4-neighbours (the agents move in four directions only)."""
+    return [n for n in hw.senses.around() if n.state != OBSTACLE and n.direction < 4]
 
 
 def act(hw: GridHardware, a: Action) -> None:

@@ -20,6 +20,8 @@ from mover import RunTeam
 from robots import Robot, library
 from robots.library import LevyParams, Neighbour, walker
 
+from ._start import common_start
+
 HERE, FOUND = "levy/here", "levy/found"
 #: Ticks between the latest member's tick when the team agreed and the common start.
 START_LEAD = 20
@@ -61,11 +63,7 @@ async def levy_search(
     async def now() -> float:
         return hw.clock.now()
 
-    latest = max((await team.distributed_and(now)).values())
-    start = latest + START_LEAD * hw.clock.tick_period
-    while hw.clock.now() < start - 1e-9:
-        await hw.clock.tick()
-    start = hw.clock.now()
+    start = await common_start(hw.clock, team, START_LEAD)
 
     def neighbours() -> list[Neighbour]:
         if method != "L+P":

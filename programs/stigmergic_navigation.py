@@ -38,6 +38,8 @@ from robots.stigmergic import (
     travel_times,
 )
 
+from ._start import common_start
+
 #: Ticks between the latest member's tick when the team agreed and the common start.
 START_LEAD = 20
 
@@ -66,7 +68,7 @@ async def stigmergic_navigation(
     if not isinstance(hw, EyeBotHardware | FootBotHardware):
         raise TypeError(f"{robot.id} is neither an eye-bot nor a foot-bot ({type(hw).__name__})")
     rng = np.random.default_rng(team.rng("stigmergic").getrandbits(128))
-    start = await _start(hw, team)
+    start = await common_start(hw.clock, team, START_LEAD)
     until = start + duration
     wall = time.perf_counter()
 
@@ -101,17 +103,3 @@ async def stigmergic_navigation(
         "footbot_s_per_wall_s": feet * duration / wall if wall > 0 else None,
         "me": everyone[team.me],
     }
-
-
-async def _start(hw: EyeBotHardware | FootBotHardware, team: RunTeam) -> float:
-    """Agree with the team on the simulated time at which everyone starts: a little after the
-    latest time any member has seen (one ``and`` step); tick until then."""
-
-    async def now() -> float:
-        return hw.clock.now()
-
-    latest = max(float(t) for t in (await team.distributed_and(now)).values())
-    start = latest + START_LEAD * hw.clock.tick_period
-    while hw.clock.now() < start - 1e-9:
-        await hw.clock.tick()
-    return hw.clock.now()

@@ -4,6 +4,7 @@ when plotting. Error bars are one standard deviation, as the paper's (the legend
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -48,12 +49,7 @@ def _fig2(plt, records: Records, _figure: str):  # type: ignore[no-untyped-def]
     if not drawn:
         plt.close(fig)
         return None
-    ax.set_xlabel("foot-bots")
-    ax.set_ylabel("time (simulated s)")
-    ax.set_title("Fig. 2: travel times, cluttered arena", fontsize=9)
-    count_axis(ax, sorted({r["footbots"] for r in rows}))
-    legend(ax, "sd", fontsize=8, title_fontsize=8)
-    ax.grid(alpha=0.3)
+    _by_footbots(ax, rows, "time (simulated s)", "Fig. 2: travel times, cluttered arena")
     return fig
 
 
@@ -116,10 +112,15 @@ def _beyond(plt, records: Records, _figure: str):  # type: ignore[no-untyped-def
                 capsize=3,
                 label="trip-time weights" if way == "weigh" else "the paper's learning",
             )
+    _by_footbots(ax, rows, "t_a (simulated s)", "Beyond the paper: unequal corridors, r = 1.5")
+    return fig
+
+
+def _by_footbots(ax: Any, rows: Records, ylabel: str, title: str) -> None:
+    """Label an axis of times against the foot-bot count, with the counts of ``rows`` as ticks."""
     ax.set_xlabel("foot-bots")
-    ax.set_ylabel("t_a (simulated s)")
-    ax.set_title("Beyond the paper: unequal corridors, r = 1.5", fontsize=9)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize=9)
     count_axis(ax, sorted({r["footbots"] for r in rows}))
     legend(ax, "sd", fontsize=8, title_fontsize=8)
     ax.grid(alpha=0.3)
-    return fig

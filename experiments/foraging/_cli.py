@@ -16,7 +16,7 @@ from .._common import add_run_arguments, comma_list, read_run_arguments, runner_
 from .._figures import add_figure_arguments
 from ._model import load_times, model_rows, paper_times, pooled, report
 from ._paper import PAPER_T1, PAPER_T2, PAPER_T3
-from ._plots import plot
+from ._plots import Chart, plot
 from ._report import no_nan, table1, table2, table3
 from ._settings import TABLES, ForagingSettings
 from ._trial import Row, table1_rows, table2_rows, table3_rows
@@ -222,12 +222,8 @@ def _table(t: str, s: ForagingSettings) -> tuple[str, dict[str, Any], list[Row],
             "ours": [r.mean for r in rows],
         }
         errors = {"ours": [r.stats.se for r in rows]}
-        return (
-            text,
-            figures,
-            rows,
-            _plot(s, "table1", xs, series, errors, "agents", "Table 1 (Setup 1)"),
-        )
+        chart = Chart("table1", xs, series, errors, "agents", "Table 1 (Setup 1)")
+        return text, figures, rows, _plot(s, chart)
     if t == "2":
         xs, rows = table2_rows(s)
         text, figures = table2(xs, rows, s.seed)
@@ -238,12 +234,8 @@ def _table(t: str, s: ForagingSettings) -> tuple[str, dict[str, Any], list[Row],
             "ours projected V_ref/n": [vref / n for n in xs],
         }
         errors = {"ours measured": [r.stats.se for r in rows]}
-        return (
-            text,
-            figures,
-            rows,
-            _plot(s, "table2", xs, series, errors, "agents", "Table 2 (Setup 2)"),
-        )
+        chart = Chart("table2", xs, series, errors, "agents", "Table 2 (Setup 2)")
+        return text, figures, rows, _plot(s, chart)
     sizes, got = table3_rows(s, ("cmarking", "ants") if t == "ants" else ("cmarking",))
     text, figures = table3(sizes, got, s.seed)
     cells = [z * z for z in sizes]
@@ -253,18 +245,8 @@ def _table(t: str, s: ForagingSettings) -> tuple[str, dict[str, Any], list[Row],
     name = "fig9" if t == "ants" else "table3"
     rows = [r for rs in got.values() for r in rs]
     title = "Table 3 (Setup 3), 50 agents"
-    return text, figures, rows, _plot(s, name, cells, series, errors, "cells", title)
+    return text, figures, rows, _plot(s, Chart(name, cells, series, errors, "cells", title))
 
 
-def _plot(
-    s: ForagingSettings,
-    name: str,
-    xs: list[int],
-    series: dict[str, list[float]],
-    errors: dict[str, list[float]],
-    xlabel: str,
-    title: str,
-) -> Path | None:
-    if s.out is None:
-        return None
-    return plot(s.out, name, xs, series, errors, xlabel, title, s.format)
+def _plot(s: ForagingSettings, chart: Chart) -> Path | None:
+    return None if s.out is None else plot(s.out, chart, s.format)

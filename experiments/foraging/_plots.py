@@ -4,22 +4,26 @@ paper's; matplotlib with the Agg backend, imported only when plotting."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import NamedTuple
 
 from .._figures import count_axis, legend, pyplot, save
 
 
-def plot(
-    out_dir: Path,
-    name: str,
-    xs: list[int],
-    series: dict[str, list[float]],
-    errors: dict[str, list[float]],
-    xlabel: str,
-    title: str,
-    fmt: str = "png",
-) -> Path:
-    """Write ``<name>.<fmt>`` into ``out_dir``: one curve per series, with the standard errors
-    ``errors`` gives for it (the paper's have none)."""
+class Chart(NamedTuple):
+    """One figure: its file name, the x values, one curve per series (``errors`` gives the
+    standard errors of those that have them; the paper's have none), the axis label, the title."""
+
+    name: str
+    xs: list[int]
+    series: dict[str, list[float]]
+    errors: dict[str, list[float]]
+    xlabel: str
+    title: str
+
+
+def plot(out_dir: Path, chart: Chart, fmt: str = "png") -> Path:
+    """Write ``<name>.<fmt>`` of ``chart`` into ``out_dir``."""
+    name, xs, series, errors, xlabel, title = chart
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(6, 4))
     for label, ys in series.items():

@@ -11,7 +11,14 @@ from dataclasses import replace
 from mover.cli import UsageError
 from robots.library import METHODS, LevyParams
 
-from .._common import add_run_arguments, comma_list, read_run_arguments, runner_parser
+from .._common import (
+    add_list_arguments,
+    add_run_arguments,
+    comma_list,
+    read_run_arguments,
+    runner_parser,
+    shown,
+)
 from .._figures import add_figure_arguments
 from .._saved import add_saved_arguments
 from ._paper import ALPHA_TARGETS, ALPHAS, FIG8_TARGETS, FIG9_ROBOTS, Setup
@@ -21,6 +28,9 @@ from ._sweep import SWEEPS, points, run_points
 
 MAX_TIME = 1e6
 """The longest censoring time a run may be given (simulated s)."""
+# The options that set the fields of the same names in LevyParams and in Setup.
+_WALK_OPTIONS = ("rho0", "k_rep", "signature_range", "k_sig", "own_signatures")
+_SETUP_OPTIONS = ("alpha", "max_time", "scale", "cap", "fixed")
 _KEYS = {"fig8": "targets", "fig9": "robots", "alpha": "alpha"}
 _TITLES = {
     "fig8": "search time (s) vs number of targets, 10 robots (Fig. 8)",
@@ -42,29 +52,22 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         help="comma list of fig8, fig9, alpha (default fig8,fig9)",
     )
     add_run_arguments(parser, runs=50, seed=None, workers=2)
-    parser.add_argument(
-        "--methods",
-        type=comma_list(str, METHODS),
-        default=list(METHODS),
-        help="comma list of FL, L, L+P",
-    )
-    parser.add_argument(
-        "--targets",
-        type=comma_list(int),
-        default=list(FIG8_TARGETS),
-        help="Fig. 8's target counts (default 1,2,4,8,12,16)",
-    )
-    parser.add_argument(
-        "--robots",
-        type=comma_list(int),
-        default=list(FIG9_ROBOTS),
-        help="Fig. 9's robot counts (default 1,2,5,10,15,20,30)",
-    )
-    parser.add_argument(
-        "--alphas",
-        type=comma_list(float),
-        default=list(ALPHAS),
-        help="stable indices of the alpha sweep (default 0.5,0.75,1,1.25,1.5,2)",
+    add_list_arguments(
+        parser,
+        ("--methods", comma_list(str, METHODS), METHODS, "comma list of FL, L, L+P"),
+        (
+            "--targets",
+            comma_list(int),
+            FIG8_TARGETS,
+            f"Fig. 8's target counts {shown(FIG8_TARGETS)}",
+        ),
+        ("--robots", comma_list(int), FIG9_ROBOTS, f"Fig. 9's robot counts {shown(FIG9_ROBOTS)}"),
+        (
+            "--alphas",
+            comma_list(float),
+            ALPHAS,
+            f"stable indices of the alpha sweep {shown(ALPHAS)}",
+        ),
     )
     parser.add_argument("--alpha", type=float, default=Setup.alpha, help="the walks' α (1)")
     parser.add_argument("--max-time", type=float, default=Setup.max_time, help="censor (s)")
@@ -112,23 +115,8 @@ def settings(args: argparse.Namespace) -> LevySettings:
             " --signature-range must be positive and finite, --cap positive (inf: no cap),"
             " --k-rep and --k-sig finite and not negative"
         )
-    walk = replace(
-        LevyParams(),
-        rho0=args.rho0,
-        k_rep=args.k_rep,
-        signature_range=args.signature_range,
-        k_sig=args.k_sig,
-        own_signatures=args.own_signatures,
-    )
-    setup = replace(
-        Setup(),
-        alpha=args.alpha,
-        max_time=args.max_time,
-        scale=args.scale,
-        cap=args.cap,
-        fixed=args.fixed,
-        walk=walk,
-    )
+    walk = replace(LevyParams(), **{name: getattr(args, name) for name in _WALK_OPTIONS})
+    setup = replace(Setup(), walk=walk, **{name: getattr(args, name) for name in _SETUP_OPTIONS})
     save = None if args.no_save else args.save
     if save is not None and setup.tag():  # runs of other settings are kept apart
         save = save.with_name(f"{save.name}-{setup.tag()}")

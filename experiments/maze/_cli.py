@@ -11,7 +11,13 @@ from mover.cli import UsageError
 from robots.explore import EXCHANGES, METHODS
 from sim_hw.grid import MazeFileError, load_maze
 
-from .._common import add_run_arguments, comma_list, read_run_arguments, runner_parser
+from .._common import (
+    add_list_arguments,
+    add_run_arguments,
+    comma_list,
+    read_run_arguments,
+    runner_parser,
+)
 from .._figures import add_figure_arguments
 from ._paper import AGENT_COUNTS, PROBABILITIES, SIZE
 from ._report import composite, composite_text, tables
@@ -32,24 +38,25 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         default=None,
         help="fewer runs for HEDAC, the slow method (default: --runs)",
     )
-    parser.add_argument(
-        "--methods",
-        type=comma_list(str, METHODS),
-        default=list(METHODS),
-        help=f"comma list of {', '.join(METHODS)}",
-    )
-    parser.add_argument(
-        "--agents",
-        type=comma_list(int),
-        default=list(AGENT_COUNTS),
-        help="comma list of agent counts (default 1,2,4,6,8,10,15,20)",
+    add_list_arguments(
+        parser,
+        ("--methods", comma_list(str, METHODS), METHODS, f"comma list of {', '.join(METHODS)}"),
+        (
+            "--agents",
+            comma_list(int),
+            AGENT_COUNTS,
+            "comma list of agent counts (default 1,2,4,6,8,10,15,20)",
+        ),
     )
     parser.add_argument("--size", type=int, default=SIZE, help="nominal maze size (default 30)")
-    parser.add_argument(
-        "--p",
-        type=comma_list(float),
-        default=list(PROBABILITIES),
-        help="comma list of obstacle probabilities (default 0.85,0.15)",
+    add_list_arguments(
+        parser,
+        (
+            "--p",
+            comma_list(float),
+            PROBABILITIES,
+            "comma list of obstacle probabilities (default 0.85,0.15)",
+        ),
     )
     parser.add_argument(
         "--exchanges",

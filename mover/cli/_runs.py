@@ -30,7 +30,7 @@ from . import (
     seed,
     team_from_args,
 )
-from ._verbs import NO_ANSWER, _plain, _statuses, _team_options, observe
+from ._verbs import NO_ANSWER, _listing, _on_team, _plain, _statuses, _team_options, observe
 
 if TYPE_CHECKING:
     from .._node import Node
@@ -263,15 +263,9 @@ async def _attach(team: TeamCredentials, config: NodeConfig, args: argparse.Name
 
 def register_runs(sub: Sub) -> None:
     """Add ``mover runs``."""
-    p = sub.add_parser("runs", help="list the runs on the members of a team")
-    _team_options(p)
-    p.add_argument("--json", action="store_true", help="one JSON object per run")
-    p.set_defaults(func=run_runs)
-
-
-def run_runs(args: argparse.Namespace) -> int:
-    team, config = team_from_args(args)
-    return asyncio.run(_runs(team, config, args))
+    _listing(
+        sub, "runs", "list the runs on the members of a team", "one JSON object per run", _runs
+    )
 
 
 async def _runs(team: TeamCredentials, config: NodeConfig, args: argparse.Namespace) -> int:
@@ -318,12 +312,7 @@ def register_cancel(sub: Sub) -> None:
     )
     p.add_argument("run", type=member_name)
     _team_options(p)
-    p.set_defaults(func=run_cancel)
-
-
-def run_cancel(args: argparse.Namespace) -> int:
-    team, config = team_from_args(args)
-    return asyncio.run(_cancel(team, config, args))
+    p.set_defaults(func=_on_team(_cancel))
 
 
 async def _cancel(team: TeamCredentials, config: NodeConfig, args: argparse.Namespace) -> int:

@@ -17,6 +17,7 @@ import math
 import secrets
 import sys
 import time
+from collections.abc import Callable, Coroutine
 from typing import TYPE_CHECKING, Any
 
 from .._config import NodeConfig, TeamCredentials
@@ -36,6 +37,9 @@ if TYPE_CHECKING:
     from .._node import Node
 
     Sub = argparse._SubParsersAction[argparse.ArgumentParser]
+    TeamVerb = Callable[
+        [TeamCredentials, NodeConfig, argparse.Namespace], Coroutine[object, object, int]
+    ]
 
 log = logging.getLogger("mover.cli")
 
@@ -57,20 +61,30 @@ def _team_options(p: argparse.ArgumentParser) -> None:
     )
 
 
+def _on_team(verb: TeamVerb) -> Callable[[argparse.Namespace], int]:
+    """An argparse ``func`` that reads the team from the options and runs ``verb`` on it."""
+
+    def run(args: argparse.Namespace) -> int:
+        team, config = team_from_args(args)
+        return asyncio.run(verb(team, config, args))
+
+    return run
+
+
+def _listing(sub: Sub, name: str, help: str, json_help: str, verb: TeamVerb) -> None:
+    """Add a verb that lists what it observes of a team: the team's options and ``--json``."""
+    p = sub.add_parser(name, help=help)
+    _team_options(p)
+    p.add_argument("--json", action="store_true", help=json_help)
+    p.set_defaults(func=_on_team(verb))
+
+
 # -- ps -------------------------------------------------------------------------------------------
 
 
 def register_ps(sub: Sub) -> None:
     """Add ``mover ps``."""
-    p = sub.add_parser("ps", help="list the live members of a team")
-    _team_options(p)
-    p.add_argument("--json", action="store_true", help="one JSON object per member")
-    p.set_defaults(func=run_ps)
-
-
-def run_ps(args: argparse.Namespace) -> int:
-    team, config = team_from_args(args)
-    return asyncio.run(_ps(team, config, args))
+    _listing(sub, "ps", "list the live members of a team", "one JSON object per member", _ps)
 
 
 async def _ps(team: TeamCredentials, config: NodeConfig, args: argparse.Namespace) -> int:

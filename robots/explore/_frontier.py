@@ -100,33 +100,38 @@ class FrontierPolicy:
         raise NotImplementedError
 
 
-class NearestFrontier(FrontierPolicy):
+class _AmongNearest(FrontierPolicy):
+    """A policy that picks among the nearest candidates (by wavefront distance)."""
+
+    def select(self, agent: ExplorerAgent, cand: np.ndarray, passable: bytearray) -> int | None:
+        """One of the nearest candidates (:meth:`pick`), or None if none is reachable."""
+        _, _, found = wavefront(
+            passable, agent.pos, agent.width, bytearray(cand.tobytes()), nearest_only=True
+        )
+        return self.pick(agent, found) if found else None
+
+    def pick(self, agent: ExplorerAgent, found: list[int]) -> int:
+        """The goal among the nearest candidates ``found`` (not empty)."""
+        raise NotImplementedError
+
+
+class NearestFrontier(_AmongNearest):
     """Yamauchi's nearest frontier [29]: the closest unknown cell; ties broken at random."""
 
     name = "nf"
 
-    def select(self, agent: ExplorerAgent, cand: np.ndarray, passable: bytearray) -> int | None:
-        """The nearest candidate by wavefront distance."""
-        _, _, found = wavefront(
-            passable, agent.pos, agent.width, bytearray(cand.tobytes()), nearest_only=True
-        )
-        if not found:
-            return None
+    def pick(self, agent: ExplorerAgent, found: list[int]) -> int:
+        """A nearest candidate drawn at random."""
         return found[int(agent.rng.integers(len(found)))]
 
 
-class CostUtilityMNM(FrontierPolicy):
+class CostUtilityMNM(_AmongNearest):
     """CU-MNM [30]: among the nearest frontiers, the one farthest (summed) from the others."""
 
     name = "cu-mnm"
 
-    def select(self, agent: ExplorerAgent, cand: np.ndarray, passable: bytearray) -> int | None:
+    def pick(self, agent: ExplorerAgent, found: list[int]) -> int:
         """Nearest frontiers, ranked by the summed distance to the agents heard."""
-        _, _, found = wavefront(
-            passable, agent.pos, agent.width, bytearray(cand.tobytes()), nearest_only=True
-        )
-        if not found:
-            return None
         others = agent.peer_cells()
         return max(sorted(found), key=lambda f: sum(_manhattan(f, o, agent.width) for o in others))
 

@@ -28,7 +28,7 @@ import logging
 import math
 from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypedDict, Unpack
 
 import numpy as np
 
@@ -311,6 +311,18 @@ class GridStepper:
         return [names[j] for j in hearers(cells, names.index(name), self.radio, self.metric)]
 
 
+class GridRules(TypedDict, total=False):
+    """The world's rules, :class:`GridStepper`'s keyword arguments: a :class:`GridServer` passes
+    them on."""
+
+    starts: Sequence[Cell]
+    exclusive: bool
+    radio: float | None
+    metric: str
+    until: str
+    view: int
+
+
 class GridServer(LockstepDoor[GridStepper]):
     """Runs a grid world in lock-step rounds for the robots that join it (see the module): the
     door over a :class:`GridStepper`, with the grid's views (round, robots, state, text). What
@@ -325,25 +337,12 @@ class GridServer(LockstepDoor[GridStepper]):
         self,
         world: GridWorld,
         *,
-        starts: Sequence[Cell] = (),
-        exclusive: bool = False,
-        radio: float | None = None,
-        metric: str = "euclid",
-        until: str = "exhausted",
         expect: int = 0,
         timeout: float = 2.0,
-        view: int = 2,
         turns: str = "together",
+        **rules: Unpack[GridRules],
     ) -> None:
-        stepper = GridStepper(
-            world,
-            starts=starts,
-            exclusive=exclusive,
-            radio=radio,
-            metric=metric,
-            until=until,
-            view=view,
-        )
+        stepper = GridStepper(world, **rules)
         super().__init__(stepper, expect=expect, timeout=timeout, turns=turns)
         self.world = world
         self.grid = world.grid

@@ -148,19 +148,7 @@ class Drawing:
 
     def _continuous_scene(self) -> list[Entity]:
         h = self.header
-        w, ht = self.width, self.height
-        out: list[Entity] = [
-            (
-                "arena",
-                rr.LineStrips2D(
-                    [[(0, 0), (w, 0), (w, ht), (0, ht), (0, 0)]],
-                    radii=0.03,
-                    colors=WALL,
-                    draw_order=1.0,
-                ),
-                True,
-            ),
-        ]
+        out: list[Entity] = [self._arena(0.03)]
         discs = [o for o in h.get("obstacles", []) if o["shape"] == "circle"]
         if discs:
             out.append(self._discs("obstacles/circles", discs, GREY, 2.0))
@@ -300,19 +288,21 @@ class Drawing:
         return [self.xy(*p) for p in [*corners, corners[0]]]
 
     def _grid_scene(self) -> list[Entity]:
+        return [self._arena(0.05)]
+
+    def _arena(self, radius: float) -> Entity:
+        """The arena's bounding walls, drawn ``radius`` thick."""
         w, ht = self.width, self.height
-        return [
-            (
-                "arena",
-                rr.LineStrips2D(
-                    [[(0, 0), (w, 0), (w, ht), (0, ht), (0, 0)]],
-                    radii=0.05,
-                    colors=WALL,
-                    draw_order=1.0,
-                ),
-                True,
-            )
-        ]
+        return (
+            "arena",
+            rr.LineStrips2D(
+                [[(0, 0), (w, 0), (w, ht), (0, ht), (0, 0)]],
+                radii=radius,
+                colors=WALL,
+                draw_order=1.0,
+            ),
+            True,
+        )
 
     # -- frames -----------------------------------------------------------------------------
 

@@ -10,7 +10,7 @@ from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from pathlib import Path
 
-from mover import TeamCredentials
+from mover import Node, TeamCredentials
 from mover.testing import Cluster as _Cluster
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -24,6 +24,12 @@ class Cluster(_Cluster):
     ) -> asyncio.subprocess.Process:
         """Start a test robot."""
         return await self.start("tests.helpers.robot_proc", "--name", name, *extra, team=team)
+
+    async def joined(self, name: str, node: Node) -> asyncio.subprocess.Process:
+        """Start the test robot ``name`` and wait (10 s at most) until ``node`` sees it."""
+        proc = await self.robot(name)
+        await node.membership.wait_for({name}, timeout=10)
+        return proc
 
 
 @asynccontextmanager

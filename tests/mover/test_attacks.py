@@ -31,8 +31,7 @@ BOUND = 1.0  # seconds: no call may take longer while the outsider is at work
 @pytest_asyncio.fixture(scope="module", loop_scope="module")
 async def world() -> AsyncIterator[tuple[Cluster, Node]]:
     async with cluster() as c, Node("tester", c.team, kind="test", config=c.seed) as node:
-        await c.robot("r1")
-        await node.membership.wait_for({"r1"}, timeout=10)
+        await c.joined("r1", node)
         yield c, node
 
 
@@ -112,8 +111,7 @@ async def test_a_broadcast_replayed_to_a_late_joiner_is_refused(
         f"mover/{c.team.name}/bc/chatter",
         lambda: node.call("r1", "send", "chatter", "before r5 joined", None, timeout=5),
     )
-    await c.robot("r5")
-    await node.membership.wait_for({"r5"}, timeout=10)
+    await c.joined("r5", node)
     await asyncio.sleep(0.5)  # r5 has verified r1 by now
     node.zenoh_session.put(f"mover/{c.team.name}/bc/chatter", frame)
     await node.call("r1", "send", "chatter", "after r5 joined", None, timeout=5)
@@ -127,8 +125,7 @@ async def test_a_call_replayed_to_a_restarted_member_is_refused(
     world: tuple[Cluster, Node],
 ) -> None:
     c, node = world
-    proc = await c.robot("r6")
-    await node.membership.wait_for({"r6"}, timeout=10)
+    proc = await c.joined("r6", node)
     key = f"mover/{c.team.name}/rpc/r6"
     overheard: list[bytes] = []
 
@@ -145,8 +142,7 @@ async def test_a_call_replayed_to_a_restarted_member_is_refused(
     proc.kill()
     await proc.wait()
     await node.membership.wait_gone("r6", timeout=10)
-    await c.robot("r6")
-    await node.membership.wait_for({"r6"}, timeout=10)
+    await c.joined("r6", node)
     answers = [await _raw_get(node, key, frame) for frame in overheard]
     assert all(a.startswith(b"M2") for a in answers)  # sealed refusals, for the tester
     assert await node.call("r6", "bumps", timeout=5) == 0  # the replay ran nothing

@@ -22,8 +22,7 @@ BOUND_MB = 160  # the hand-off's 64 MiB, the subscription's 1000 messages, the r
 @pytest.mark.slow
 async def test_a_blocked_receiver_under_a_flood_stays_bounded() -> None:
     async with cluster() as c, Node("tester", c.team, kind="test", config=c.seed) as node:
-        await c.robot("r1")
-        await node.membership.wait_for({"r1"}, timeout=10)
+        await c.joined("r1", node)
         before = await node.call("r1", "rss_kb", timeout=5)
         blocked = asyncio.ensure_future(node.call("r1", "block", 20.0, timeout=60))
         chunk = b"x" * 1024

@@ -245,8 +245,7 @@ async def test_sigkilled_member_is_seen_gone_and_its_call_fails(
     world: tuple[Cluster, Node], tmp_path: Path
 ) -> None:
     c, node = world
-    proc = await c.robot("victim")
-    await node.membership.wait_for({"victim"}, timeout=10)
+    proc = await c.joined("victim", node)
     marker = tmp_path / "m"
     call = asyncio.create_task(node.call("victim", "hold", str(marker), timeout=None))
     await _until(lambda: marker.exists())
@@ -269,8 +268,7 @@ async def test_hung_member_is_seen_gone_within_about_a_second(
     world: tuple[Cluster, Node],
 ) -> None:
     c, node = world
-    proc = await c.robot("sleeper")
-    await node.membership.wait_for({"sleeper"}, timeout=10)
+    proc = await c.joined("sleeper", node)
     stopped = time.monotonic()
     os.kill(proc.pid, signal.SIGSTOP)
     try:

@@ -6,12 +6,10 @@ warns when the team it finds changed, and the run's seed gives every member the 
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import os
 import random
 import sys
 import time
-from collections.abc import AsyncIterator
 from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
@@ -21,6 +19,7 @@ import pytest
 from mover import BadArguments, Node, Refused, RunTeam, launch
 from mover._collective import seed_of
 from mover._programs import outcomes
+from tests.helpers.clocks import UnmodelledHold
 from tests.helpers.procs import ROOT, Cluster, cluster
 
 pytestmark = pytest.mark.processes
@@ -238,7 +237,7 @@ async def test_bad_run_control_inputs_get_one_line_and_exit_2(
 # -- the host's clock (in-process nodes) ----------------------------------------------------------
 
 
-class CountingClock:
+class CountingClock(UnmodelledHold):
     """A :class:`mover.RunClock` that counts engages and releases."""
 
     def __init__(self) -> None:
@@ -249,13 +248,6 @@ class CountingClock:
 
     async def passed(self, t: float) -> None:
         return None
-
-    def hold(self, t: float | None) -> None:
-        self.held = t
-
-    @contextlib.asynccontextmanager
-    async def idling(self) -> AsyncIterator[None]:
-        yield
 
     async def engage(self) -> None:
         self.calls.append("engage")

@@ -4,15 +4,16 @@ lock-step world whose ticks advance only when every engaged member has handed in
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import math
 import random
 import time
-from collections.abc import AsyncIterator, Awaitable, Callable, Mapping
+from collections.abc import Awaitable, Callable, Mapping
 
 import pytest
 
-from mover import MemberLost, Node, Outcome, RunTeam
+from mover import Node, Outcome, RunTeam
+from tests.helpers.clocks import UnmodelledHold
+from tests.helpers.steps import after_a_loss
 
 DT = 0.1  # simulated seconds per tick
 
@@ -47,7 +48,7 @@ class FakeWorld:
         self.notify()
 
 
-class FakeClock:
+class FakeClock(UnmodelledHold):
     """A member's :class:`mover.RunClock` over the fake world, with ``tick`` for its operation."""
 
     def __init__(self, world: FakeWorld, name: str) -> None:
@@ -73,13 +74,6 @@ class FakeClock:
     async def passed(self, t: float) -> None:
         while not self.handed_at >= t:  # it went on from readings of t (robots.hal.Clock)
             await self.world.wait()
-
-    def hold(self, t: float | None) -> None:
-        self.held = t
-
-    @contextlib.asynccontextmanager
-    async def idling(self) -> AsyncIterator[None]:
-        yield
 
     async def engage(self) -> None:
         self.world.engaged.add(self.name)
@@ -241,12 +235,8 @@ async def test_a_member_leaving_while_the_others_wait_for_it(
     await nodes[4].close()  # as if n4's process died
     world.drop("n4")
     t0 = time.monotonic()
-    if policy == "fail":
-        for task in tasks[:4]:
-            with pytest.raises(MemberLost):
-                await asyncio.wait_for(task, 2.0)
-    else:
-        outs = [await asyncio.wait_for(task, 2.0) for task in tasks[:4]]
+    outs = await after_a_loss(policy, tasks[:4], 2.0)
+    if policy != "fail":
         assert {o.winner for o in outs} == {"n1"}
     assert time.monotonic() - t0 < 2.0
     await asyncio.gather(*tasks, return_exceptions=True)

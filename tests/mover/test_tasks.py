@@ -8,7 +8,8 @@ from collections.abc import Awaitable, Callable
 
 import pytest
 
-from mover import MemberLost, Node, OperationFailed, RunTeam
+from mover import Node, OperationFailed, RunTeam
+from tests.helpers.steps import after_a_loss
 
 
 def teams(nodes: list[Node], run: str = "r", **kw: object) -> list[RunTeam]:
@@ -111,12 +112,8 @@ async def test_a_member_leaving_during_and_fails_the_step_or_is_survived(
     await asyncio.sleep(0.2)
     tasks[3].cancel()
     await nodes[3].close()  # as if n3's process died
-    if policy == "fail":
-        for task in tasks[:3]:
-            with pytest.raises(MemberLost):
-                await asyncio.wait_for(task, 1.0)
-    else:
-        outs = [await asyncio.wait_for(task, 1.0) for task in tasks[:3]]
+    outs = await after_a_loss(policy, tasks[:3], 1.0)
+    if policy != "fail":
         assert outs == [{"n0": "n0", "n1": "n1", "n2": "n2"}] * 3
 
 

@@ -21,8 +21,8 @@ import pytest
 
 from mover import Node, launch
 from mover.testing import Cluster, cluster
+from tests.helpers.procs import ROOT
 
-ROOT = Path(__file__).resolve().parents[2]
 FIELD = """
 [generator]
 kind = "random_obstacles"

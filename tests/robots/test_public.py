@@ -4,8 +4,6 @@ programs registered."""
 from __future__ import annotations
 
 import inspect
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -16,15 +14,13 @@ import robots.testing as testing
 from mover import ExpectedFault
 from mover._programs import _expected
 from robots.hal import HardwareLost
+from tests.helpers.faces import assert_documented, loaded_roots
 
 pytestmark = pytest.mark.processes
 
 
 def test_every_public_name_exists_and_is_documented() -> None:
-    for name in library.__all__:
-        obj = getattr(library, name)
-        if inspect.isclass(obj) or inspect.isfunction(obj):
-            assert inspect.getdoc(obj), f"robots.library.{name} has no docstring"
+    assert_documented(library)
     # (names starting with "@" are pytest's: installing mover installs its pytest plugin, and
     # pytest then rewrites the asserts of the whole distribution, adding globals like these)
     public = {n for n in dir(library) if not n.startswith(("_", "@"))}
@@ -32,11 +28,8 @@ def test_every_public_name_exists_and_is_documented() -> None:
 
 
 def test_the_library_needs_neither_pymunk_nor_sim_hw() -> None:
-    code = "import sys, robots.library, robots.testing, programs; print(sorted(m for m in "
-    code += "sys.modules if "
-    code += "m.split('.')[0] in ('pymunk', 'sim_hw')))"
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
-    assert out.stdout.strip() == "[]"
+    loaded = loaded_roots("robots.library, robots.testing, programs", ("pymunk", "sim_hw"))
+    assert loaded == "[]"
 
 
 def test_the_programs_are_registered() -> None:

@@ -15,7 +15,8 @@ from robots.foraging import (
     Task,
     ending,
 )
-from sim_hw.grid import Grid, GridWorld, place_resources, random_obstacles
+from sim_hw.grid import Grid, GridWorld
+from tests.robots.foraging._arena import seeded_arena
 from tests.robots.foraging.test_foraging_marking import lemma_4_1_holds
 
 
@@ -120,10 +121,7 @@ def test_trail_created_climbed_and_removed_when_source_exhausted() -> None:
 
 
 def test_team_forages_with_trails_and_keeps_lemma_4_1() -> None:
-    base = (15, 15)
-    grid = random_obstacles(31, 31, 0.30, 8, keep_free=(base,))
-    res = place_resources(grid, 8, 500, 9, exclude=(base,))
-    world = GridWorld(grid, base, res, 10)
+    grid, base, world = seeded_arena(31, 0.30, 8, piles=(8, 500, 9), n_agents=10)
     agents = [CMarkingAgent(r) for r in np.random.default_rng(10).spawn(10)]
     seen_trail = False
     while not world.exhausted and world.iteration < 50_000:
@@ -202,10 +200,7 @@ def test_single_colour_removal_cuts_a_merged_trail() -> None:
 
 
 def test_per_trail_team_forages_and_keeps_lemma_4_1() -> None:
-    base = (15, 15)
-    grid = random_obstacles(31, 31, 0.05, 8, keep_free=(base,))
-    res = place_resources(grid, 8, 500, 9, exclude=(base,))
-    world = GridWorld(grid, base, res, 10)
+    grid, base, world = seeded_arena(31, 0.05, 8, piles=(8, 500, 9), n_agents=10)
     agents = [
         CMarkingAgent(r, trail_colours="per-trail", ident=i, team=10)
         for i, r in enumerate(np.random.default_rng(10).spawn(10))

@@ -16,7 +16,8 @@ from robots.foraging import (
 )
 from robots.foraging._dice import Dice
 from robots.foraging._marking import descend, explore
-from sim_hw.grid import Grid, GridWorld, maze, place_resources, random_obstacles
+from sim_hw.grid import Grid, GridWorld, maze, random_obstacles
+from tests.robots.foraging._arena import seeded_arena
 
 
 def p(value: int, *nbrs: tuple[int, int]) -> Perception:
@@ -115,10 +116,7 @@ def test_seeded_agents_repeat_exactly() -> None:
 
 
 def test_foraging_marking_agents_bring_everything_home() -> None:
-    base = (10, 10)
-    grid = random_obstacles(21, 21, 0.2, 4, keep_free=(base,))
-    res = place_resources(grid, 3, 300, 5, exclude=(base,))
-    world = GridWorld(grid, base, res, 6)
+    grid, base, world = seeded_arena(21, 0.2, 4, piles=(3, 300, 5), n_agents=6)
     agents = [ForagingMarkingAgent(r) for r in np.random.default_rng(6).spawn(6)]
     while not world.all_delivered and world.iteration < 50_000:
         world.step(agents)

@@ -3,23 +3,19 @@
 from __future__ import annotations
 
 import inspect
-import subprocess
-import sys
 
 import pytest
 
 import robots.hal as hal
 import sim_hw
 from sim_hw import World, WorldServer, WorldSpec, in_process
+from tests.helpers.faces import assert_documented, loaded_roots
 
 pytestmark = pytest.mark.processes
 
 
 def test_all_names_exist_and_are_documented() -> None:
-    for name in sim_hw.__all__:
-        obj = getattr(sim_hw, name)
-        if inspect.isclass(obj) or inspect.isfunction(obj):
-            assert inspect.getdoc(obj), f"sim_hw.{name} has no docstring"
+    assert_documented(sim_hw)
     public = {
         n for n in dir(sim_hw) if not n.startswith("_") and not inspect.ismodule(getattr(sim_hw, n))
     }
@@ -27,10 +23,7 @@ def test_all_names_exist_and_are_documented() -> None:
 
 
 def test_hal_imports_neither_pymunk_nor_sim_hw() -> None:
-    code = "import sys, robots.hal; print(sorted(m for m in sys.modules if m.split('.')[0] in "
-    code += "('pymunk', 'sim_hw')))"
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
-    assert out.stdout.strip() == "[]"
+    assert loaded_roots("robots.hal", ("pymunk", "sim_hw")) == "[]"
 
 
 async def test_the_backend_satisfies_every_protocol() -> None:

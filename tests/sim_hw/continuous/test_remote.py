@@ -23,10 +23,10 @@ from mover._cli import main
 from mover._config import free_port
 from sim_hw import World, WorldServer, in_process, load_world, read_recording
 from sim_hw.continuous._walker import random_walk
+from tests.helpers.procs import ROOT
 
 pytestmark = [pytest.mark.processes, pytest.mark.timeout(90)]
 
-ROOT = Path(__file__).resolve().parents[3]
 WORLD = """
 [generator]
 kind = "random_obstacles"

@@ -15,7 +15,7 @@ pytest.importorskip("rerun", reason="the view extra (rerun-sdk) is not installed
 
 from mover._cli import main
 from mover._config import free_port
-from mover.testing import cluster
+from mover.testing import cluster, first_line
 
 pytestmark = pytest.mark.processes
 
@@ -25,14 +25,10 @@ WORLD = str(ROOT / "worlds" / "search_and_rescue.toml")
 
 async def expect_line(proc: asyncio.subprocess.Process, text: str, timeout: float = 30.0) -> str:
     """The next line of ``proc``'s output that contains ``text`` (its earlier lines skipped)."""
-    assert proc.stdout is not None
-    async with asyncio.timeout(timeout):
-        while True:
-            line = (await proc.stdout.readline()).decode()
-            if not line:
-                raise AssertionError(f"the process ended before saying {text!r}")
-            if text in line:
-                return line.strip()
+    line = await first_line(proc, lambda line: text in line, timeout)
+    if line is None:
+        raise AssertionError(f"the process ended before saying {text!r}")
+    return line.strip()
 
 
 def _listening(port: int) -> bool:
