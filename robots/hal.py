@@ -43,6 +43,7 @@ __all__ = [
     "RadioLocator",
     "Sighting",
     "Sonar",
+    "sleep_in_ticks",
 ]
 
 Pose = tuple[float, float, float]
@@ -243,6 +244,15 @@ class Clock(IdleClock, Protocol):
         own clock this does nothing.
         """
         ...
+
+
+async def sleep_in_ticks(clock: Clock, dt: float) -> None:
+    """:meth:`Clock.sleep` for a clock whose time moves by ticks: tick until ``dt`` seconds of
+    hardware time have passed, at least one tick."""
+    end = clock.now() + dt - 1e-9
+    await clock.tick()
+    while clock.now() < end:
+        await clock.tick()
 
 
 @dataclass(frozen=True, slots=True)

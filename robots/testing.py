@@ -25,7 +25,7 @@ import math
 from collections.abc import AsyncIterator, Callable
 from dataclasses import dataclass, field
 
-from .hal import Hardware, HardwareLost, Pose
+from .hal import Hardware, HardwareLost, Pose, sleep_in_ticks
 
 __all__ = ["FakeClock", "FakeDrive", "FakeOdometry", "FakeSonar", "fake_hardware"]
 
@@ -71,10 +71,7 @@ class FakeClock:
 
     async def sleep(self, dt: float) -> None:
         """Let ``dt`` seconds pass: whole ticks, at least one."""
-        end = self.now() + dt - 1e-9
-        await self.tick()
-        while self.now() < end:
-            await self.tick()
+        await sleep_in_ticks(self, dt)
 
     @contextlib.asynccontextmanager
     async def ticking(self) -> AsyncIterator[None]:

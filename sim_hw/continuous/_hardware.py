@@ -22,6 +22,7 @@ from robots.hal import (
     Hardware,
     PushResult,
     Sighting,
+    sleep_in_ticks,
 )
 from sim_hw import _link
 from sim_hw._link import WorldLink
@@ -112,10 +113,7 @@ class SimHardware:
 
     async def sleep(self, dt: float) -> None:
         """Tick until ``dt`` simulated seconds have passed (at least one tick)."""
-        end = self.now() + dt - 1e-9
-        await self.tick()
-        while self.now() < end:
-            await self.tick()
+        await sleep_in_ticks(self, dt)
 
     @contextlib.asynccontextmanager
     async def ticking(self) -> AsyncIterator[None]:

@@ -7,14 +7,10 @@ once its hardware is up.
 
 from __future__ import annotations
 
-import asyncio
-import logging
-import sys
-
-from mover import NodeConfig, RunTeam, TeamCredentials
+from mover import RunTeam
 from robots import Robot
 from robots.grid_hal import GridHardware
-from robots.process import run_robot
+from tests.helpers.robot_main import run_test_robot
 
 
 async def or_rounds(robot: Robot[GridHardware], team: RunTeam, ends: dict[str, int]) -> int:
@@ -31,21 +27,9 @@ async def or_rounds(robot: Robot[GridHardware], team: RunTeam, ends: dict[str, i
     return int(outcome.result)
 
 
-def main() -> None:
-    """Run the robot process named by the first argument until killed."""
-    logging.basicConfig(level=logging.INFO, format="%(name)s: %(message)s")
-    asyncio.run(
-        run_robot(
-            sys.argv[1],
-            team=TeamCredentials.from_env(),
-            config=NodeConfig.from_env(),
-            hardware="grid",
-            options={"world": "gridworld", "idle_period": 0.0},
-            programs={"or_rounds": or_rounds},
-            ready=lambda: print("READY", flush=True),
-        )
-    )
-
-
 if __name__ == "__main__":
-    main()
+    run_test_robot(
+        {"or_rounds": or_rounds},
+        hardware="grid",
+        options={"world": "gridworld", "idle_period": 0.0},
+    )

@@ -7,14 +7,10 @@ environment) hosting one program, ``walk``. Prints ``READY`` once its hardware i
 
 from __future__ import annotations
 
-import asyncio
-import logging
-import sys
 import time
 from typing import Any
 
-from mover import NodeConfig, TeamCredentials
-from robots.process import run_robot
+from tests.helpers.robot_main import run_test_robot
 
 
 async def walk(
@@ -34,19 +30,5 @@ async def walk(
     return {"start": start, "end": hw.clock.now()}
 
 
-def main() -> None:
-    """Run the robot process named by the first argument until killed."""
-    logging.basicConfig(level=logging.INFO, format="%(name)s: %(message)s")
-    asyncio.run(
-        run_robot(
-            sys.argv[1],
-            team=TeamCredentials.from_env(),
-            config=NodeConfig.from_env(),
-            programs={"walk": walk},
-            ready=lambda: print("READY", flush=True),
-        )
-    )
-
-
 if __name__ == "__main__":
-    main()
+    run_test_robot({"walk": walk})
