@@ -25,7 +25,13 @@ class Ticks:
       tick of the current readings and waits for the next readings. Concurrent callers share
       the exchange under way. The exchange runs as its own task: a caller that is cancelled
       leaves it to finish in the background (the world never sees half an exchange, and never
-      a second command for the tick), and the next ``tick`` waits for it before its own.
+      a second command for the tick), and the next ``tick`` takes its readings as its own (the
+      tick's command went in already).
+    * The readings change only inside a call of this robot's (``tick``, or leaving
+      ``idling``), never when the world happens to answer: after a caller was cancelled the
+      readings stay those it handed its command in on until the next ``tick``. So what a
+      program reads next is fixed in simulated time (a ``distributed_or``'s losers, cancelled
+      inside a tick, read the same whether or not the world answered meanwhile).
     * ``idling(stop)``: the world neither waits for this robot nor lets it hold a tick back;
       ``stop()`` is the command that stands meanwhile (the stopped drive). The readings keep
       coming (frames carry idle robots' entries). Leaving is acknowledged by the world: on
@@ -52,8 +58,9 @@ class Ticks:
         self.readings = readings
         self._link = link
         self._tick_of, self._time_of, self._after = tick_of, time_of, after
-        self._task: asyncio.Task[None] | None = None
-        self._waiting = 0  # callers awaiting the exchange under way
+        self._task: asyncio.Task[tuple[int, Command, Readings]] | None = None
+        self._exchanges = 0  # exchanges started
+        self._taken = 0  # the last exchange whose readings are in (see take)
         self._idle = False
         self._handed = -math.inf  # time of the readings the last command was handed in on
         self._hold: float | None = None  # no command on readings later than this (hold)
@@ -69,34 +76,75 @@ class Ticks:
         """The time of the current readings."""
         return self._time_of(self.readings)
 
-    async def tick(self, make: Callable[[], Command]) -> None:
-        """One exchange (shared with concurrent callers; see the class)."""
-        if self._idle:
-            raise RuntimeError(f"robot {self.robot!r} is idle (inside clock.idling()): no ticks")
-        task = self._task
-        if task is not None and not task.done() and self._waiting == 0:
-            await self._finish(task)  # left by a cancelled caller: it goes first
-            task = self._task
-        while self._hold is not None and self.now() > self._hold and (task is None or task.done()):
+    async def tick(self, make: Callable[[], Command], *, unless_idle: bool = False) -> bool:
+        """One exchange (shared with concurrent callers; see the class); True once done.
+
+        Inside ``idling()`` there are no ticks: RuntimeError, or with ``unless_idle`` (a
+        background pump that pauses while a team step idles the robot) False at once."""
+        while True:
+            if self._idle:
+                if unless_idle:
+                    return False
+                raise RuntimeError(
+                    f"robot {self.robot!r} is idle (inside clock.idling()): no ticks"
+                )
+            if not (self._hold is not None and self.now() > self._hold and self._taken_all()):
+                break
             await self._wait_change()  # held (see hold): until released
-            task = self._task
-        if task is None or task.done():
-            task = self._task = asyncio.get_running_loop().create_task(self._exchange(make))
+        task = self._task
+        if task is None or self._taken_all():
+            self._exchanges += 1
+            exchange = self._exchange(self._exchanges, make)
+            task = self._task = asyncio.get_running_loop().create_task(exchange)
             task.add_done_callback(failure)
-        self._waiting += 1
-        try:
-            await asyncio.shield(task)
-        finally:
-            self._waiting -= 1
+        await asyncio.shield(task)
+        self._take(task)
+        return True
 
-    async def _finish(self, task: asyncio.Task[None]) -> None:
-        """Wait for ``task`` to end; raise what it raised if it lost the hardware."""
-        await asyncio.wait([task])
-        lost = failure(task)
-        if isinstance(lost, HardwareLost):
-            raise lost
+    async def changed(self) -> None:
+        """Return at the next change: readings taken, a command handed in, a hold, idling
+        entered or left, :meth:`poke`."""
+        await self._wait_change()
 
-    async def _exchange(self, make: Callable[[], Command]) -> None:
+    def poke(self) -> None:
+        """Wake whoever waits in :meth:`changed`."""
+        self._pulse()
+
+    def _taken_all(self) -> bool:
+        """Whether the readings of every exchange started are in (none is under way or left;
+        one that failed or was cancelled has none to take)."""
+        task = self._task
+        if task is not None and task.done() and (task.cancelled() or failure(task) is not None):
+            self._taken = self._exchanges
+        return self._taken == self._exchanges
+
+    def _take(self, task: asyncio.Task[tuple[int, Command, Readings]]) -> None:
+        """Take the readings of ``task``, an exchange that ended well, unless a later exchange's
+        are in already (callers that shared it take them once)."""
+        number, command, readings = task.result()
+        if number > self._taken:
+            self._taken = number
+            if self._after is not None:
+                self._after(command, readings)
+            self.readings = readings
+            self._pulse()
+
+    async def _finish(self) -> None:
+        """Let the exchange under way end and take its readings (as a caller that was cancelled
+        would have); raise what it raised if it lost the hardware."""
+        while not self._taken_all():  # (another caller may start one meanwhile)
+            task = self._task
+            assert task is not None
+            await asyncio.wait([task])
+            lost = failure(task)
+            if isinstance(lost, HardwareLost):
+                raise lost
+            if lost is None and not task.cancelled():
+                self._take(task)
+
+    async def _exchange(
+        self, number: int, make: Callable[[], Command]
+    ) -> tuple[int, Command, Readings]:
         if self._lost is not None:
             raise self._lost
         command = make()
@@ -107,10 +155,7 @@ class Ticks:
         except HardwareLost as exc:
             self._lose(exc)
             raise
-        if self._after is not None:
-            self._after(command, readings)
-        self.readings = readings
-        self._pulse()
+        return number, command, readings
 
     def hold(self, t: float | None) -> None:
         """Hand in no command on readings later than ``t`` until ``hold(None)``: a tick waits
@@ -133,11 +178,11 @@ class Ticks:
         """Be idle for the block (see the class); HardwareLost if the world is gone."""
         if self._idle:
             raise RuntimeError(f"robot {self.robot!r} is already idle")
-        if self._task is not None and not self._task.done():
-            await self._finish(self._task)  # the exchange under way ends first
+        await self._finish()  # the exchange under way ends first
         if self._lost is not None:
             raise self._lost
-        self._idle = True
+        self._idle = True  # (no await since _finish: no exchange can start in between)
+        self._pulse()
         try:
             self.readings = await self._guard(self._link.idle(stop()))
             watch = asyncio.get_running_loop().create_task(self._watch())

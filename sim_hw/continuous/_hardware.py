@@ -5,13 +5,15 @@ tick and keeps the readings of the last one in a :class:`sim_hw._ticks.Ticks`, t
 clock over a link to its world — a direct call into a :class:`WorldServer` in process, or one
 exchange of frames per tick with the world process. Concurrent waiters on a tick share one
 exchange, so a robot sends exactly one command per tick however many of its tasks wait, and a
-cancelled tick finishes in the background (the world never sees half of one).
+cancelled tick finishes in the background (the world never sees half of one), its readings
+taken by the next tick.
 """
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
+import logging
 import math
 from collections.abc import AsyncIterator, Mapping
 from typing import TYPE_CHECKING, Any
@@ -35,6 +37,8 @@ if TYPE_CHECKING:
     from mover import Node
 
     from ._stepper import WorldServer
+
+log = logging.getLogger("sim_hw.hardware")
 
 PUSH_SPEED = 0.2
 """Forward speed (m/s) a push test asks for; the force bound decides whether it is reached."""
@@ -66,6 +70,7 @@ class SimHardware:
         self._floor: list[Any] | None = None
         self._pump: asyncio.Task[None] | None = None
         self._pumps = 0
+        self._paused_said = False  # the pump paused for idling, said once
         self.max_speed = float(spec.get("max_speed", 0.0))  # an eye-bot has no drive
 
     @property
@@ -119,8 +124,11 @@ class SimHardware:
     async def ticking(self) -> AsyncIterator[None]:
         """Tick in the background for the duration of the block (nested blocks are fine).
 
-        On the way out the exchange under way is finished, not cancelled, so the world never
-        sees half a tick.
+        While the robot is idle (a team step in simulated time idles it as it waits for the
+        others) the background ticks pause, and go on once it is not: the earlier advice to
+        keep the clock ticking around team steps still runs, though steps no longer need it
+        (said once in the log). On the way out the exchange under way is finished, not
+        cancelled, so the world never sees half a tick.
         """
         self._pumps += 1
         pump = self._pump
@@ -131,12 +139,22 @@ class SimHardware:
         finally:
             self._pumps -= 1
             if self._pumps == 0:
+                self._ticks.poke()  # a paused pump sees that the block ended
                 await asyncio.shield(pump)
 
     async def _run_pump(self) -> None:
         while self._pumps > 0:
-            await self.tick()
-            await asyncio.sleep(0)  # let the block's own tasks run between ticks
+            if await self._ticks.tick(self._command, unless_idle=True):
+                await asyncio.sleep(0)  # let the block's own tasks run between ticks
+                continue
+            if not self._paused_said:
+                self._paused_said = True
+                log.warning(
+                    "robot %s: clock.ticking() pauses while a team step idles the robot; "
+                    "team steps need no ticking() around them any more",
+                    self.id,
+                )
+            await self._ticks.changed()
 
     # -- drive, LED, floor ----------------------------------------------------------------------
 
