@@ -10,6 +10,9 @@
             await c.robots("ernst", "moseley")
             outcomes = await launch(node, "my_program", ["ernst", "moseley"], {}, run="t1")
 
+:func:`cpu_hogs` and :func:`stutter` load the machine and stall a run's processes for moments,
+for tests that a seeded run repeats however it is scheduled.
+
 Every process gets a fresh team key and connects to a seed port chosen at run time (multicast
 scouting off); everything started is killed on exit, and dies with this process even when it is
 SIGKILLed (Linux: a parent-death signal). ``pytest`` users get the same as fixtures from
@@ -29,9 +32,21 @@ from pathlib import Path
 from typing import Any
 
 from ._config import NodeConfig, TeamCredentials, free_port
+from ._load import cpu_hogs, descendants, stutter
 from ._node import Node
 from ._procs import Child, ProcessExited, start, stop
 from ._programs import ProgramHost
+
+__all__ = [
+    "Cluster",
+    "ProcessExited",
+    "cluster",
+    "cpu_hogs",
+    "descendants",
+    "first_line",
+    "serve_programs",
+    "stutter",
+]
 
 STOP_WAIT = 10.0
 """Seconds :meth:`Cluster.stop` waits for its killed processes."""
