@@ -228,7 +228,12 @@ class Clock(IdleClock, Protocol):
     """Seconds of hardware time between control ticks."""
 
     async def tick(self) -> None:
-        """Send this tick's commands and wait for the next tick's readings."""
+        """Send this tick's commands and wait for the next tick's readings.
+
+        The readings change only inside this robot's own clock calls: if an earlier ``tick()``
+        was cancelled once its commands went in (a ``distributed_or``'s loser), the readings
+        stay as they were until the next ``tick()``, which takes that tick's readings and hands
+        in nothing more (the commands set meanwhile go with the tick after)."""
         ...
 
     async def sleep(self, dt: float) -> None:
@@ -240,8 +245,10 @@ class Clock(IdleClock, Protocol):
         something else (a message, a team step).
 
         In lock-step simulation the world waits for the command of every robot that is not
-        idle each tick; a robot waiting on its team must keep ticking. On hardware with its
-        own clock this does nothing.
+        idle each tick; a robot waiting on something outside the world (a message, a person)
+        must keep ticking. Team steps need no ``ticking()``: in simulated time they idle the
+        clock while a member waits for the others, and the background ticks pause meanwhile.
+        On hardware with its own clock this does nothing.
         """
         ...
 

@@ -10,6 +10,7 @@ clock neither is used, and an OR costs only its wall-clock messages.
 from __future__ import annotations
 
 import asyncio
+import math
 from collections.abc import Awaitable, Callable
 from typing import Any, Protocol
 
@@ -53,6 +54,9 @@ class TimedOp:
     async def _run(self, operation: Callable[[], Awaitable[Any]]) -> Any:
         result = await operation()
         self.finished_at = self.clock.now()  # as it returns: no loop turn in between
+        # Nothing more on these readings until the step is over (a background ticking() of
+        # the program's must not hand in this tick while the decision travels).
+        self.clock.hold(math.nextafter(self.finished_at, -math.inf))
         return result
 
     async def passed(self, t: float) -> dict[str, Any]:

@@ -165,19 +165,26 @@ class TaskTeam:
         returns. Raises MemberLost if a member is lost (policy ``fail``) or all are.
         """
         metrics = self._begin("or")
-        async with StepTasks() as tasks:  # leaving it awaits the losers' cleanup
-            clock = self.clock if self.simulated else None
-            local = TimedOp(clock, operation, tasks.start) if clock is not None else None
-            op = local.op if local is not None else tasks.start(operation())
-            self.collectives.operations.reached(self.run, metrics.step, local)
-            try:
-                decision = await self._or_decision(metrics, tasks, op, local)
-            finally:
-                tasks.cancel()  # the losers' operations, a poll still under way
-                if local is not None:
-                    local.clock.hold(None)  # after the cancel: the operation hands in no more
-        metrics.continued = time.perf_counter()
-        self._raise_lost(metrics, decision)
+        clock = self.clock if self.simulated else None
+        try:
+            async with StepTasks() as tasks:  # leaving it awaits the losers' cleanup
+                local = TimedOp(clock, operation, tasks.start) if clock is not None else None
+                op = local.op if local is not None else tasks.start(operation())
+                self.collectives.operations.reached(self.run, metrics.step, local)
+                try:
+                    decision = await self._or_decision(metrics, tasks, op, local)
+                finally:
+                    tasks.cancel()  # the losers' operations, a poll still under way
+            metrics.continued = time.perf_counter()
+            self._raise_lost(metrics, decision)
+            if clock is not None:
+                # Every member has stopped its operation before any goes on: a winner that
+                # ticked at once could else let a loser's operation, not yet told, take one
+                # more tick's readings (docs/reproducible-runs.md).
+                await self._rejoin()
+        finally:
+            if clock is not None:
+                clock.hold(None)  # held since its finish (the winner) or past it (a loser)
         outcome = Outcome(decision.winner, decision.result)
         return await continuation(outcome) if continuation else outcome
 
@@ -351,7 +358,9 @@ class TaskTeam:
     async def _rejoin(self) -> None:
         """After a ``distributed_and`` in simulated time: every member is engaged again before
         any goes on (step kind ``"rejoin"``), so that none misses a tick it would have acted
-        in; nobody ticks meanwhile, so the world holds still. 2(n-1) messages."""
+        in; after a ``distributed_or`` in simulated time: every member has stopped its
+        operation before any goes on. Nobody ticks meanwhile, so the world holds still.
+        2(n-1) messages."""
         metrics = self._begin("rejoin")
         decision = await self._and_designated(metrics, None)
         metrics.continued = time.perf_counter()
