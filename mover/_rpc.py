@@ -107,10 +107,12 @@ class RpcServer:
         except WireError as exc:
             state.stats["refused"] += 1
             state.faults.warn("rpc", f"refused a call: {exc}")
-            if isinstance(exc, EnvelopeRefused) and exc.envelope.kind == "call":
-                # authentic but refused: a sealed answer its sender can believe
-                kind = "SessionChanged" if isinstance(exc, SessionChanged) else "Refused"
-                self._send(query, exc.envelope, _err(kind, str(exc)))
+            if isinstance(exc, SessionChanged) and exc.envelope.kind == "call":
+                # A call for an earlier session of this node: a sealed answer its caller can
+                # believe, and asks again on. The only refusal sealed: a replayed call is an
+                # outsider relaying a member's call, and a sealed "replayed" it could hand back
+                # would end the caller's call (README, Security: relaying).
+                self._send(query, exc.envelope, _err("SessionChanged", str(exc)))
                 return
             with query:
                 if state.on_refused == "reply":

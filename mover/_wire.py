@@ -141,8 +141,10 @@ class Envelope:
 
 
 class EnvelopeRefused(WireError):
-    """An authentic envelope refused all the same (replayed, for someone else): the refuser can
-    answer its sender with a sealed refusal, which the sender can believe."""
+    """An authentic envelope refused all the same (replayed, for someone else). Anyone who
+    overheard it can send it again, so a refusal of it is never sealed (a sealed refusal the
+    sender believes would let an outsider end the sender's call); only :class:`SessionChanged`
+    is answered sealed."""
 
     def __init__(self, message: str, envelope: Envelope) -> None:
         super().__init__(message)

@@ -35,7 +35,7 @@ from mover import (
     UnknownProcedure,
     UnknownRobot,
 )
-from mover._wire import Opener, Sealer
+from mover._wire import Opener, Sealer, read_refusal
 from tests.helpers.procs import Cluster, cluster
 
 pytestmark = [pytest.mark.processes, pytest.mark.asyncio(loop_scope="module")]
@@ -194,18 +194,19 @@ async def test_replayed_envelope_is_refused(world: tuple[Cluster, Node]) -> None
     frame = sealer.seal("call", ["bump", [], {}], 999_999, to="r2", to_epoch=r2)
     answers = [await _raw_get(node, "mover/alpha/rpc/r2", frame) for _ in range(2)]
     opener = Opener(c.team.name, c.team.key)
-    first, second = (opener.open(a) for a in answers)  # sealed answers, to the tester
-    assert first.recipient == second.recipient == "tester"
-    assert "ok" in first.payload
-    assert second.payload["err"]["type"] == "Refused" and "replayed" in str(second.payload)
+    first = opener.open(answers[0])  # the sealed answer, to the tester
+    assert first.recipient == "tester" and "ok" in first.payload
+    # The replay: only an unsigned refusal, which nobody need believe (a sealed one, handed
+    # back by an outsider relaying the call, would end the caller's call: test_reflection.py)
+    assert "replayed" in (read_refusal(answers[1]) or "")
     assert await node.call("r2", "bumps", timeout=5) == before + 1
     # the same call overheard on its way to r2 and sent to r3: refused, r3 runs nothing
     before3 = await node.call("r3", "bumps", timeout=5)
-    other = opener.open(await _raw_get(node, "mover/alpha/rpc/r3", frame))
-    assert other.payload["err"]["type"] == "Refused" and "not for 'r3'" in str(other.payload)
+    other = await _raw_get(node, "mover/alpha/rpc/r3", frame)
+    assert "not for 'r3'" in (read_refusal(other) or "")
     unaddressed = sealer.seal("call", ["bump", [], {}], 1_000_000)  # for no one in particular
-    blank = opener.open(await _raw_get(node, "mover/alpha/rpc/r3", unaddressed))
-    assert blank.payload["err"]["type"] == "Refused"
+    blank = await _raw_get(node, "mover/alpha/rpc/r3", unaddressed)
+    assert read_refusal(blank) is not None
     assert await node.call("r3", "bumps", timeout=5) == before3
 
 

@@ -1,0 +1,49 @@
+"""An outsider with no team key relaying every frame it can reach back at the team (issue 24):
+each call and challenge asked again of the members, each answer handed back as its own, each
+cancel and broadcast put again. Among real processes, no call and no run may fail."""
+
+from __future__ import annotations
+
+import asyncio
+import signal
+from pathlib import Path
+
+import pytest
+
+from mover import Node, launch
+from tests.helpers.procs import cluster
+from tests.mover.test_collectives_processes import start_team
+
+pytestmark = pytest.mark.processes
+
+ROUNDS = 10  # of 10 short and 10 long (0.3 s) calls at once: 200 calls
+
+
+@pytest.mark.timeout(120)
+async def test_an_outsider_reflecting_every_frame_fails_no_call_and_no_run(
+    tmp_path: Path,
+) -> None:
+    members = ["a", "b", "c"]
+    async with cluster() as c, Node("tester", c.team, kind="tool", config=c.seed) as node:
+        await c.joined("r1", node)
+        await start_team(c, node, members)
+        reflector = await c.start("tests.helpers.reflector", c.team.name, "--seconds", "60")
+        await asyncio.sleep(0.5)  # its queryables are known to every member
+        for k in range(ROUNDS):
+            short = [node.call("r1", "add", k, i, timeout=10) for i in range(10)]
+            long = [node.call("r1", "sleep", 0.3, timeout=10) for _ in range(10)]
+            got = await asyncio.gather(*short, *long)
+            assert got == [k + i for i in range(10)] + ["slept"] * 10
+        ran_or = await launch(
+            node, "cleanup", members, {"winner": "b", "marker_dir": str(tmp_path)}, run="or"
+        )
+        assert {o.get("result") for o in ran_or.values()} == {"b:the box"}, ran_or
+        ran_and = await launch(node, "and_outage", members, {"hold": 0.3}, run="and")
+        every = {m: m.upper() for m in members}
+        assert [o.get("result") for o in ran_and.values()] == [every] * 3, ran_and
+        c.kill(reflector, signal.SIGTERM)
+        assert reflector.stdout is not None
+        said = (await asyncio.wait_for(reflector.stdout.read(), 10)).decode().split()
+    queries, answers, puts = (int(x) for x in said[-3:]) if said[:1] == ["DONE"] else (0, 0, 0)
+    print(f"the outsider relayed {queries} queries, {answers} answers, {puts} puts")
+    assert queries >= 200 and answers > 0, said  # the attack happened
