@@ -37,6 +37,7 @@ from typing import TYPE_CHECKING, Any
 
 from ._collective import (
     POLICIES,
+    RUN_LOST,
     SEED_LIMIT,
     Collectives,
     Policy,
@@ -44,10 +45,12 @@ from ._collective import (
     TaskTeam,
     wait_reachable,
 )
+from ._collective._group import StepTasks
 from ._exceptions import (
     BadArguments,
     CallError,
     ExpectedFault,
+    MemberLost,
     MoverError,
     Refused,
     RobotLost,
@@ -236,7 +239,10 @@ class ProgramHost:
             team.clock = await self._engage()
             await team.begin(timeout=self.join_timeout)  # every member starts on the same tick
             team.phase = "running"
-            result = await fn(self.robot, team, *args, **kwargs)
+            async with StepTasks() as tasks:  # the program, and the watch for a stall's end
+                tasks.spawn(self._watch_dropped(team))
+                result = await fn(self.robot, team, *args, **kwargs)
+                tasks.cancel()
         except asyncio.CancelledError:
             entry = self.runs.get(team.run)
             if entry is not None and entry.cancelled_by is not None:
@@ -262,6 +268,34 @@ class ProgramHost:
         with contextlib.suppress(MoverError):
             await team.report("done")
         return result
+
+    async def _watch_dropped(self, team: RunTeam) -> None:
+        """Raise MemberLost if the team went on without this member while it was out of reach
+        (stopped past its lease, or cut off): a member of the run that comes back into view
+        (after it, or this member, was gone) is asked what run steps it knows of that lost or
+        left out members (one call per return; nothing while the team stays whole)."""
+        others = set(team.members) - {team.me}
+        left: set[str] = set()
+        async for event in self.node.membership.events():
+            if event.name not in others:
+                continue
+            if event.kind == "leave":
+                left.add(event.name)
+                continue
+            if event.name not in left:
+                continue
+            left.discard(event.name)
+            try:
+                said = await self.node.call(event.name, RUN_LOST, team.run, timeout=5)
+            except MoverError:
+                continue  # gone again, or an older member: the steps will tell
+            lost = {m for m in said if isinstance(m, str)} if isinstance(said, list) else set()
+            if team.me in lost or (lost and self.collectives.policy_of(team.run) == "fail"):
+                raise MemberLost(
+                    f"run {team.run!r} went on without this member ({team.me}): it was out "
+                    f"of the team's reach past its lease; {event.name} counts {sorted(lost)} lost",
+                    members=frozenset(lost),
+                )
 
     async def _engage(self) -> RunClock | None:
         """Engage the hardware's clock for a run (once for runs that share it)."""
