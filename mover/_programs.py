@@ -20,7 +20,10 @@ unless both were started with ``share=True``. A run starts, once its members are
 hardware is ready, by engaging the host's clock (``ProgramHost.clock``, a
 :class:`~mover.RunClock`, if the hardware has one: a lock-step world then waits for this robot)
 and passing the team's begin barrier (:meth:`~mover.RunTeam.begin`: every member starts on
-the same tick); the clock is released when the last run here ends, however it ends.
+the same tick); the clock is released when the last run here ends, however it ends. A member
+that was out of the team's reach past its lease (stopped, cut off) while the others went on
+without it finds its run ended (``MemberLost``) as soon as it sees them again: it is not left
+busy in a run nobody else is in.
 """
 
 from __future__ import annotations
