@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import asyncio
 import time
+from functools import partial
 
 import pytest
 
@@ -48,7 +49,7 @@ async def test_a_member_lost_before_or_during_the_and_fails_it_for_all(
         await asyncio.sleep(LOST_GRACE + 0.2)  # counted lost before any member reached the step
         steps = [asyncio.ensure_future(t.distributed_and(lambda: asyncio.sleep(0))) for t in teams]
     else:
-        steps = [asyncio.ensure_future(t.distributed_and(lambda t=t: hold(t))) for t in teams]
+        steps = [asyncio.ensure_future(t.distributed_and(partial(hold, t))) for t in teams]
         await asyncio.sleep(0.2)
         lost_at = await lose(nodes[4], nodes[:4])
     done, _ = await asyncio.wait(steps, timeout=BOUND + LOST_GRACE + 0.2)
