@@ -238,9 +238,11 @@ class Collectives:
 
     def start_run(self, run: str) -> None:
         """A run named ``run`` starts here: forget what an earlier run of that name left (its
-        decided steps, heard decisions, operations; that it ended). What other members already
-        sent for the new run stays: it cannot be decided before this member began."""
+        decided steps, heard decisions, operations, whom it lost; that it ended). What other
+        members already sent for the new run stays: it cannot be decided before this member
+        began."""
         self.operations.start_run(run)
+        self._dropped.pop(run, None)
         for key in [k for k, st in self._steps.items() if k[0] == run and st.decision.done()]:
             del self._steps[key]
 
@@ -327,7 +329,11 @@ class Collectives:
             return
 
     def _expected(self, state: Step) -> set[str]:
-        return {m for m in state.members if m in self.node.membership}
+        """The members whose word the step waits for: those alive, but for those an earlier
+        step of the run went on without (``survivors``: one back from a stall is not waited
+        for again, as its run ends when it sees the team: ProgramHost)."""
+        dropped = self._dropped.get(state.run, set())
+        return {m for m in state.members if m in self.node.membership and m not in dropped}
 
     async def or_join(self, run: str, step: int, member: str, members: list[str]) -> Any:
         """A member waits for the decision."""
