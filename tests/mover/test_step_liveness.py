@@ -21,6 +21,7 @@ import pytest
 import pytest_asyncio
 
 from mover import Node, launch
+from mover._collective import Policy
 from mover._collective._step import LOST_GRACE
 from mover._config import NodeConfig
 from mover.testing import first_line
@@ -123,7 +124,7 @@ async def test_a_member_killed_at_a_phase_boundary_ends_the_step_for_all(
     [("and", "c", "fail"), ("or", "a", "fail"), ("and", "c", "survivors")],
 )
 async def test_a_member_stopped_past_its_lease_is_lost_and_not_left_busy(
-    team: Team, kind: str, victim: str, policy: str
+    team: Team, kind: str, victim: str, policy: Policy
 ) -> None:
     """The others end with MemberLost (``survivors``: they go on without it, and end); the
     resumed member finds its run ended, and the whole team takes the next run."""
