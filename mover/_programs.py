@@ -48,7 +48,6 @@ from ._collective import (
     TaskTeam,
     wait_reachable,
 )
-from ._collective._group import StepTasks
 from ._exceptions import (
     BadArguments,
     CallError,
@@ -242,10 +241,7 @@ class ProgramHost:
             team.clock = await self._engage()
             await team.begin(timeout=self.join_timeout)  # every member starts on the same tick
             team.phase = "running"
-            async with StepTasks() as tasks:  # the program, and the watch for a stall's end
-                tasks.spawn(self._watch_dropped(team))
-                result = await fn(self.robot, team, *args, **kwargs)
-                tasks.cancel()
+            result = await self._program(fn, team, args, kwargs)
         except asyncio.CancelledError:
             entry = self.runs.get(team.run)
             if entry is not None and entry.cancelled_by is not None:
@@ -272,6 +268,25 @@ class ProgramHost:
             await team.report("done")
         return result
 
+    async def _program(
+        self, fn: Callable[..., Any], team: RunTeam, args: list[Any], kwargs: dict[str, Any]
+    ) -> Any:
+        """The program, beside the watch for the end of a stall (a TaskGroup of two); what the
+        program raises is raised as itself (unwrapped from the group, its context untouched)."""
+        failed: BaseException | None = None
+        try:
+            async with asyncio.TaskGroup() as tasks:
+                watch = tasks.create_task(self._watch_dropped(team))
+                try:
+                    result = await fn(self.robot, team, *args, **kwargs)
+                finally:
+                    watch.cancel()
+        except BaseExceptionGroup as group:  # the program's error, or the watch's MemberLost
+            failed = group.exceptions[0] if len(group.exceptions) == 1 else group
+        if failed is not None:
+            raise failed  # (outside the handler: the error's own context stays)
+        return result
+
     async def _watch_dropped(self, team: RunTeam) -> None:
         """Raise MemberLost if the team went on without this member while it was out of reach
         (stopped past its lease, or cut off): a member of the run that comes back into view
@@ -293,10 +308,16 @@ class ProgramHost:
             except MoverError:
                 continue  # gone again, or an older member: the steps will tell
             lost = {m for m in said if isinstance(m, str)} if isinstance(said, list) else set()
-            if team.me in lost or (lost and self.collectives.policy_of(team.run) == "fail"):
+            if team.me in lost:
                 raise MemberLost(
                     f"run {team.run!r} went on without this member ({team.me}): it was out "
                     f"of the team's reach past its lease; {event.name} counts {sorted(lost)} lost",
+                    members=frozenset(lost),
+                )
+            if lost and self.collectives.policy_of(team.run) == "fail":
+                raise MemberLost(
+                    f"run {team.run!r} lost {sorted(lost)} while this member ({team.me}) was "
+                    f"out of the team's reach (as {event.name} knows it)",
                     members=frozenset(lost),
                 )
 
