@@ -20,7 +20,10 @@ unless both were started with ``share=True``. A run starts, once its members are
 hardware is ready, by engaging the host's clock (``ProgramHost.clock``, a
 :class:`~mover.RunClock`, if the hardware has one: a lock-step world then waits for this robot)
 and passing the team's begin barrier (:meth:`~mover.RunTeam.begin`: every member starts on
-the same tick); the clock is released when the last run here ends, however it ends.
+the same tick); the clock is released when the last run here ends, however it ends. A member
+that was out of the team's reach past its lease (stopped, cut off) while the others went on
+without it finds its run ended (``MemberLost``) as soon as it sees them again: it is not left
+busy in a run nobody else is in.
 """
 
 from __future__ import annotations
@@ -37,6 +40,7 @@ from typing import TYPE_CHECKING, Any
 
 from ._collective import (
     POLICIES,
+    RUN_LOST,
     SEED_LIMIT,
     Collectives,
     Policy,
@@ -48,6 +52,7 @@ from ._exceptions import (
     BadArguments,
     CallError,
     ExpectedFault,
+    MemberLost,
     MoverError,
     Refused,
     RobotLost,
@@ -236,7 +241,7 @@ class ProgramHost:
             team.clock = await self._engage()
             await team.begin(timeout=self.join_timeout)  # every member starts on the same tick
             team.phase = "running"
-            result = await fn(self.robot, team, *args, **kwargs)
+            result = await self._program(fn, team, args, kwargs)
         except asyncio.CancelledError:
             entry = self.runs.get(team.run)
             if entry is not None and entry.cancelled_by is not None:
@@ -262,6 +267,59 @@ class ProgramHost:
         with contextlib.suppress(MoverError):
             await team.report("done")
         return result
+
+    async def _program(
+        self, fn: Callable[..., Any], team: RunTeam, args: list[Any], kwargs: dict[str, Any]
+    ) -> Any:
+        """The program, beside the watch for the end of a stall (a TaskGroup of two); what the
+        program raises is raised as itself (unwrapped from the group, its context untouched)."""
+        failed: BaseException | None = None
+        try:
+            async with asyncio.TaskGroup() as tasks:
+                watch = tasks.create_task(self._watch_dropped(team))
+                try:
+                    result = await fn(self.robot, team, *args, **kwargs)
+                finally:
+                    watch.cancel()
+        except BaseExceptionGroup as group:  # the program's error, or the watch's MemberLost
+            failed = group.exceptions[0] if len(group.exceptions) == 1 else group
+        if failed is not None:
+            raise failed  # (outside the handler: the error's own context stays)
+        return result
+
+    async def _watch_dropped(self, team: RunTeam) -> None:
+        """Raise MemberLost if the team went on without this member while it was out of reach
+        (stopped past its lease, or cut off): a member of the run that comes back into view
+        (after it, or this member, was gone) is asked what run steps it knows of that lost or
+        left out members (one call per return; nothing while the team stays whole)."""
+        others = set(team.members) - {team.me}
+        left: set[str] = set()
+        async for event in self.node.membership.events():
+            if event.name not in others:
+                continue
+            if event.kind == "leave":
+                left.add(event.name)
+                continue
+            if event.name not in left:
+                continue
+            left.discard(event.name)
+            try:
+                said = await self.node.call(event.name, RUN_LOST, team.run, timeout=5)
+            except MoverError:
+                continue  # gone again, or an older member: the steps will tell
+            lost = {m for m in said if isinstance(m, str)} if isinstance(said, list) else set()
+            if team.me in lost:
+                raise MemberLost(
+                    f"run {team.run!r} went on without this member ({team.me}): it was out "
+                    f"of the team's reach past its lease; {event.name} counts {sorted(lost)} lost",
+                    members=frozenset(lost),
+                )
+            if lost and self.collectives.policy_of(team.run) == "fail":
+                raise MemberLost(
+                    f"run {team.run!r} lost {sorted(lost)} while this member ({team.me}) was "
+                    f"out of the team's reach (as {event.name} knows it)",
+                    members=frozenset(lost),
+                )
 
     async def _engage(self) -> RunClock | None:
         """Engage the hardware's clock for a run (once for runs that share it)."""

@@ -8,7 +8,7 @@ member's operations as the designated member asks about them (``_operations``), 
 """
 
 from ._clock import RunClock
-from ._designated import Collectives
+from ._designated import RUN_LOST, Collectives
 from ._member import TaskTeam
 from ._reach import wait_reachable
 from ._step import (
@@ -24,6 +24,7 @@ from ._step import (
 
 __all__ = [
     "POLICIES",
+    "RUN_LOST",
     "SEED_LIMIT",
     "Collectives",
     "Decision",

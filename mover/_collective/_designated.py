@@ -4,8 +4,11 @@ It owns every step's record on this node (:class:`~._step.Step`) and is the only
 its decision, whichever way the decision becomes known here: decided as the step's designated
 member (from the claims, polls and results of the others; announced at once, in one broadcast),
 heard in another's announcement, or told to this node's own member in an answer. It asks the
-others ``or_passed``, in one TaskGroup (:class:`~._operations.Operations` answers it). Protocol
-and costs: ``docs/collectives.md``. Memory: the last ``STEP_MEMORY`` steps.
+others ``or_passed`` (:class:`~._operations.Operations` answers it) in a TaskGroup of the step's
+own, which ends, awaited, when the step is decided; the steps' groups belong to one TaskGroup of
+the node's. A member lost at any moment fails (policy ``fail``) every undecided step it is a
+member of, served here already or later (it is remembered, while it stays gone). Protocol and
+costs: ``docs/collectives.md``. Memory: the last ``STEP_MEMORY`` steps and runs.
 """
 
 from __future__ import annotations
@@ -47,7 +50,9 @@ OR_JOIN = "mover.or_join"
 OR_CLAIM = "mover.or_claim"
 OR_PASSED = "mover.or_passed"
 AND_DONE = "mover.and_done"
+AND_JOIN = "mover.and_join"
 AND_PUT = "mover.and_put"
+RUN_LOST = "mover.run_lost"
 
 
 class Collectives:
@@ -61,8 +66,10 @@ class Collectives:
         self._steps: dict[tuple[str, int], Step] = {}
         self.operations = Operations()  # this member's, for the designated one's or_passed
         self._faults = FaultLog(node.name)
-        self._questions: asyncio.TaskGroup | None = None  # owns the or_passed questions
+        self._owners: asyncio.TaskGroup | None = None  # owns each served step's own group
         self._closed = False
+        self._gone: set[str] = set()  # members lost (past the grace) and not back since
+        self._dropped: dict[str, set[str]] = {}  # run -> members lost or left out in it
         self._announcements = node.subscribe(DECIDED_TOPIC)
         self._listener = asyncio.get_running_loop().create_task(self._serve())
         #: The procedures, by their wire name: exported, and called directly by this node's
@@ -72,12 +79,15 @@ class Collectives:
             OR_CLAIM: self.or_claim,
             OR_PASSED: self.operations.or_passed,
             AND_DONE: self.and_done,
+            AND_JOIN: self.and_join,
             AND_PUT: self.and_put,
+            RUN_LOST: self.run_lost,
         }
         for name, procedure in self.procedures.items():
             node.export(procedure, name)
         # Only a member gone for LOST_GRACE counts as lost: when a router restarts, every
         # member sees the others leave a moment before it sees its own link go.
+        node.membership.on_leave(self._gone.discard)  # lost again only after the grace
         node.membership.on_gone(self._member_left, grace=LOST_GRACE)
 
     # -- each step's record, and its decision ------------------------------------------------
@@ -105,16 +115,15 @@ class Collectives:
             old.decision.set_exception(MemberLost(f"step {step} of run {run!r} was never decided"))
             failure(old.decision)  # retrieved: it may have no waiter left
             old.told = True  # its waiters were told, and there is nothing to announce
-            _cancel_all(old.asking)
 
     def decision(self, run: str, step: int) -> asyncio.Future[Decision]:
         """The decision of step ``(run, step)`` once known here (a future; read only)."""
         return self._record(run, step).decision
 
     def learned(self, run: str, step: int, decision: Decision) -> None:
-        """This node's member learned the decision of OR step ``(run, step)`` in an answer: it
-        is known here now, as if heard (should this node become the designated member, it
-        hands the decision on)."""
+        """This node's member learned the decision of step ``(run, step)`` in an answer: it
+        is known here now, as if heard (should this node become the designated member of an
+        OR, it hands the decision on; asked :meth:`run_lost`, it answers from it)."""
         state = self._record(run, step)
         if not state.decision.done():
             self._decide(state, decision)
@@ -122,16 +131,28 @@ class Collectives:
     def _decide(self, state: Step, decision: Decision) -> None:
         """The one writer of a step's decision (decided here, heard, or learned)."""
         state.decision.set_result(decision)
+        left_out = set(decision.lost)
+        if decision.kind == "all" and state.served:
+            left_out |= state.members - decision.results.keys()  # survivors: dropped
+        if left_out:
+            self._dropped.setdefault(state.run, set()).update(left_out)
+            while len(self._dropped) > STEP_MEMORY:
+                del self._dropped[next(iter(self._dropped))]
         if state.served:
             self._tell(state)
+
+    def run_lost(self, run: str) -> list[str]:
+        """The members of run ``run`` that a step decided here, heard or learned here lost
+        (policy ``fail``) or left out (``survivors``): asked by a member back from a stall,
+        which cannot tell otherwise whether the team went on without it."""
+        return sorted(self._dropped.get(run, ()))
 
     def _tell(self, state: Step) -> None:
         """A served OR step is decided: stop asking, and tell the members the decision, in one
         broadcast unless every one of them asked (they get it in their answer). Once."""
         if state.kind != "or" or state.told:
             return
-        state.told = True
-        _cancel_all(state.asking)
+        state.told = True  # (the step's questions end with it: see _own)
         others = state.members - {self.node.name}
         if not others <= state.joined:
             wire = [state.run, state.step, state.decision.result().to_wire()]
@@ -144,9 +165,12 @@ class Collectives:
         state = self._record(run, step)
         if not state.served:
             state.served, state.kind, state.members = True, kind, frozenset(members)
-            name = self.node.name
-            state.lost = [m for m in members if m < name and m not in self.node.membership]
+            name, alive = self.node.name, self.node.membership
+            state.lost = [m for m in members if m < name and m not in alive]
             state.takeover = bool(state.lost)
+            # Lost before the step was served here (before any member reached it, say): as
+            # if lost during it (_member_left), or no one would ever count it.
+            state.gone = {m for m in state.members & self._gone if m not in alive}
         return state
 
     def sent(self, run: str, step: int) -> int:
@@ -156,15 +180,42 @@ class Collectives:
         return 0 if state is None else state.announced + 2 * state.questions
 
     async def _serve(self) -> None:
-        """Hear the announcements, and own the questions (until the node closes)."""
-        async with asyncio.TaskGroup() as questions:
-            self._questions = questions
+        """Hear the announcements, and own the served steps' groups (until the node closes:
+        their questions are then cancelled, as nobody is left to tell their answers to)."""
+        async with asyncio.TaskGroup() as owners:
+            self._owners = owners
             try:
                 await self._listen()
             finally:
-                self._closed, self._questions = True, None
-                for state in self._steps.values():
-                    _cancel_all(state.asking)  # nobody is left to tell their answers to
+                self._closed, self._owners = True, None
+
+    async def _own(self, state: Step) -> None:
+        """The owner of served step ``state``'s tasks (its or_passed questions): a TaskGroup
+        that ends, its tasks cancelled and awaited, once the step is decided."""
+        async with asyncio.TaskGroup() as group:
+            state.tasks = group
+            state.owned.set_result(None)
+            await asyncio.wait({state.decision})
+            for task in state.asking.values():
+                task.cancel()
+        state.tasks = None
+
+    def _start_owner(self, state: Step) -> None:
+        """Start ``state``'s owner, once (not before the node's group is, nor once decided)."""
+        if state.owner is None and self._owners is not None and not state.decision.done():
+            state.owner = self._owners.create_task(self._own(state))
+
+    async def _owned(self, state: Step) -> None:
+        """Start ``state``'s owner (once), and return once it owns the step's tasks."""
+        self._start_owner(state)
+        if state.owner is not None:
+            await asyncio.wait({state.owned, state.owner}, return_when=asyncio.FIRST_COMPLETED)
+
+    async def step_ended(self, run: str, step: int) -> None:
+        """Once every task step ``(run, step)`` started here has ended (its decision known)."""
+        state = self._steps.get((run, step))
+        if state is not None and state.owner is not None:
+            await asyncio.wait({state.owner})
 
     async def _listen(self) -> None:
         async for message in self._announcements:
@@ -187,9 +238,11 @@ class Collectives:
 
     def start_run(self, run: str) -> None:
         """A run named ``run`` starts here: forget what an earlier run of that name left (its
-        decided steps, heard decisions, operations; that it ended). What other members already
-        sent for the new run stays: it cannot be decided before this member began."""
+        decided steps, heard decisions, operations, whom it lost; that it ended). What other
+        members already sent for the new run stays: it cannot be decided before this member
+        began."""
         self.operations.start_run(run)
+        self._dropped.pop(run, None)
         for key in [k for k, st in self._steps.items() if k[0] == run and st.decision.done()]:
             del self._steps[key]
 
@@ -199,9 +252,22 @@ class Collectives:
         while len(self._policies) > STEP_MEMORY:
             del self._policies[next(iter(self._policies))]
 
+    def policy_of(self, run: str) -> Policy:
+        """The policy of run ``run``'s steps."""
+        return self._policies.get(run, self.policy)
+
     def _fails(self, state: Step) -> bool:
         """Whether a lost member fails ``state``'s step (policy ``fail``)."""
-        return self._policies.get(state.run, self.policy) == "fail"
+        return self.policy_of(state.run) == "fail"
+
+    def _lost_in(self, state: Step) -> tuple[str, ...]:
+        """The members whose loss fails ``state``'s step (policy ``fail``; else none): the
+        designated members before this one (taking over) and those lost since, but for an
+        all-to-all AND's members whose result is in (they may have finished and left)."""
+        if not self._fails(state):
+            return ()
+        spared = state.results.keys() if state.kind == "and_all" else set()
+        return tuple(sorted(set(state.lost) | (state.gone - spared)))
 
     def end_run(self, run: str) -> None:
         """Run ``run`` ended here: questions about its steps are answered "out" from now on."""
@@ -213,11 +279,12 @@ class Collectives:
         task = state.asking.get(member)
         if task is not None and not task.done():
             return  # one question at a time: a later answer covers an earlier time
-        if self._questions is None:
-            if not self._closed:  # the owner of the questions starts with the next loop turn
+        if state.tasks is None:  # its owner is not (or no longer) under way
+            if not self._closed and not state.decision.done():
+                self._start_owner(state)  # (its group opens with a later loop turn)
                 asyncio.get_running_loop().call_soon(self._ask_passed, state, member, t)
             return
-        state.asking[member] = self._questions.create_task(self._question(state, member, t))
+        state.asking[member] = state.tasks.create_task(self._question(state, member, t))
 
     async def _question(self, state: Step, member: str, t: float) -> None:
         try:
@@ -262,7 +329,11 @@ class Collectives:
             return
 
     def _expected(self, state: Step) -> set[str]:
-        return {m for m in state.members if m in self.node.membership}
+        """The members whose word the step waits for: those alive, but for those an earlier
+        step of the run went on without (``survivors``: one back from a stall is not waited
+        for again, as its run ends when it sees the team: ProgramHost)."""
+        dropped = self._dropped.get(state.run, set())
+        return {m for m in state.members if m in self.node.membership and m not in dropped}
 
     async def or_join(self, run: str, step: int, member: str, members: list[str]) -> Any:
         """A member waits for the decision."""
@@ -286,6 +357,7 @@ class Collectives:
         state.joined.add(member)
         if finished_at is not None:
             state.timed = True
+            await self._owned(state)  # the questions it may ask belong to the step
         if all(m != member for m, _, _ in state.claims):
             state.claims.append((member, result, finished_at))
         self._maybe_decide(state)
@@ -298,12 +370,12 @@ class Collectives:
             # will never ask.
             self._tell(state)
             return
-        if state.takeover:
-            if not self._expected(state) <= state.joined:
-                return  # a successor decides only once every live member has said what it knows
-            if state.lost and self._fails(state):
-                self._decide(state, Decision("lost", lost=tuple(state.lost)))
-                return
+        if state.takeover and not self._expected(state) <= state.joined:
+            return  # a successor decides only once every live member has said what it knows
+        lost = self._lost_in(state)
+        if lost:
+            self._decide(state, Decision("lost", lost=lost))
+            return
         if not state.claims:
             return
         if state.timed:
@@ -347,17 +419,26 @@ class Collectives:
         self._maybe_complete(state)
         return (await asyncio.shield(state.decision)).to_wire()
 
+    async def and_join(self, run: str, step: int, member: str, members: list[str]) -> Any:
+        """A member still in its operation saw a member of the step lost: the decision, once
+        taken (it fails the step unless the policy is ``survivors``)."""
+        state = self.serve(run, step, members)
+        state.joined.add(member)
+        self._maybe_complete(state)
+        return (await asyncio.shield(state.decision)).to_wire()
+
     def and_put(self, run: str, step: int, member: str, members: list[str], result: Any) -> None:
         """All-to-all: a member's result, sent to every other member."""
-        state = self.serve(run, step, members)
+        state = self.serve(run, step, members, "and_all")
         state.results[member] = result
         self._maybe_complete(state)
 
     def _maybe_complete(self, state: Step) -> None:
         if state.decision.done():
             return
-        if state.lost and self._fails(state):
-            self._decide(state, Decision("lost", lost=tuple(state.lost)))
+        lost = self._lost_in(state)
+        if lost:
+            self._decide(state, Decision("lost", lost=lost))
             return
         expected = self._expected(state) | state.results.keys() & state.members
         if self._fails(state) and not state.members <= expected:
@@ -369,20 +450,14 @@ class Collectives:
     def _member_left(self, name: str) -> None:
         if not self.node.connected():
             return  # we are cut off, not they: stall (see docs/collectives.md, Failures)
+        self._gone.add(name)  # for the steps served from now on, too
         for state in list(self._steps.values()):
             if not state.served or state.decision.done() or name not in state.members:
                 continue
             state.gone.add(name)
-            alive = self._expected(state)
-            if not alive:
+            if not self._expected(state):
                 self._decide(state, Decision("lost", lost=tuple(sorted(state.members))))
-            elif self._fails(state) and name not in state.results:
-                self._decide(state, Decision("lost", lost=(name,)))
-            else:
+            elif state.kind == "or":
                 self._maybe_decide(state)
+            else:
                 self._maybe_complete(state)
-
-
-def _cancel_all(tasks: dict[str, asyncio.Task[None]]) -> None:
-    for task in tasks.values():
-        task.cancel()

@@ -19,9 +19,9 @@ from typing import TYPE_CHECKING, Any
 
 from .._exceptions import MemberLost, NotDelivered
 from ._clock import RunClock, TimedOp
-from ._designated import AND_DONE, AND_PUT, OR_CLAIM, OR_JOIN, Collectives
+from ._designated import AND_DONE, AND_JOIN, AND_PUT, OR_CLAIM, OR_JOIN, Collectives
 from ._group import Settled, StepTasks
-from ._reach import Retry, wait_reachable
+from ._reach import Retry, wait_lost, wait_reachable
 from ._step import (
     CALL_TIMEOUT,
     POLL_AFTER,
@@ -175,6 +175,8 @@ class TaskTeam:
                     decision = await self._or_decision(metrics, tasks, op, local)
                 finally:
                     tasks.cancel()  # the losers' operations, a poll still under way
+            # As the designated member, its questions of the step: ended (and awaited) too.
+            await self.collectives.step_ended(self.run, metrics.step)
             metrics.continued = time.perf_counter()
             self._raise_lost(metrics, decision)
             if clock is not None:
@@ -280,23 +282,37 @@ class TaskTeam:
         all-to-all exchange (O(n^2) messages) instead of the designated member (O(n)).
         """
         metrics = self._begin("and" if designated else "and_all")
-        error: BaseException | None = None
-        try:
-            result = await operation()
-        except Exception as exc:
-            error = exc
-            result = OperationFailed(type(exc).__name__, str(exc))
-        metrics.finished = time.perf_counter()
-        wire = result.to_wire() if error else result
         timed = self.clock is not None and self.simulated
-        # In simulated time a member that finished is idle while it waits, so that the world
-        # neither waits for it nor moves on because of it: when the last one finishes, the
-        # world holds still until all have been told.
-        async with self.clock.idling() if timed and self.clock else contextlib.nullcontext():
-            if designated:
-                decision = await self._and_designated(metrics, wire)
+        if not designated:  # its record, served from the start: a loss is counted there
+            self.collectives.serve(self.run, metrics.step, self.members, "and_all")
+        told = self.collectives.decision(self.run, metrics.step)
+        error: BaseException | None = None
+        async with StepTasks() as tasks:
+            op = tasks.start(operation())
+            if designated and self.collectives.policy_of(self.run) == "fail":
+                tasks.start(self._told_of_loss(metrics))  # sets ``told`` if a member is lost
+            waiting: set[asyncio.Future[Any]] = {op, told}
+            await asyncio.wait(waiting, return_when=asyncio.FIRST_COMPLETED)
+            tasks.cancel()  # the operation, if the step was decided meanwhile (a loss)
+        if told.done():  # decided while this member was in its operation: it was lost
+            metrics.finished = time.perf_counter()
+            decision = told.result()
+        else:
+            ended = op.result()
+            metrics.finished = time.perf_counter()
+            error = ended.error
+            if error is None:
+                wire = ended.value
             else:
-                decision = await self._and_all(metrics, wire)
+                wire = OperationFailed(type(error).__name__, str(error)).to_wire()
+            # In simulated time a member that finished is idle while it waits, so that the
+            # world neither waits for it nor moves on because of it: when the last one
+            # finishes, the world holds still until all have been told.
+            async with self.clock.idling() if timed and self.clock else contextlib.nullcontext():
+                if designated:
+                    decision = await self._and_designated(metrics, wire)
+                else:
+                    decision = await self._and_all(metrics, wire)
         metrics.continued = time.perf_counter()
         self._raise_lost(metrics, decision)
         if timed:
@@ -305,6 +321,21 @@ class TaskTeam:
             raise error
         results = {m: unwire(r) for m, r in decision.results.items()}
         return await continuation(results) if continuation else results
+
+    async def _told_of_loss(self, metrics: StepMetrics) -> None:
+        """While this member is in its operation of AND step ``metrics.step``: once a member
+        of the team is lost, ask the designated member for the decision (which the loss fails),
+        and make it known here (2 messages, only after a loss)."""
+        await wait_lost(self.node, self.members)
+        while True:
+            designated = await self._designated()
+            args = (self.run, metrics.step, self.me, self.members)
+            try:
+                answer = await self._ask(metrics, designated, AND_JOIN, *args)
+                break
+            except Retry:
+                await self._recover(designated)
+        self.collectives.learned(self.run, metrics.step, Decision.from_wire(answer))
 
     async def _and_designated(self, metrics: StepMetrics, result: Any) -> Decision:
         while True:
@@ -320,12 +351,15 @@ class TaskTeam:
                     self.members,
                     result,
                 )
-                return Decision.from_wire(answer)
+                decision = Decision.from_wire(answer)
+                # Known here now: a member back from a stall may ask (Collectives.run_lost).
+                self.collectives.learned(self.run, metrics.step, decision)
+                return decision
             except Retry:
                 await self._recover(designated)
 
     async def _and_all(self, metrics: StepMetrics, result: Any) -> Decision:
-        state = self.collectives.serve(self.run, metrics.step, self.members)
+        state = self.collectives.serve(self.run, metrics.step, self.members, "and_all")
 
         async def send(member: str) -> None:
             while member in self.node.membership or not self.node.connected():

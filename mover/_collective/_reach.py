@@ -1,7 +1,10 @@
-"""Waiting out a lost link: whether a member that did not answer is gone or only cut off.
+"""Waiting out a lost link: whether a member that did not answer is gone or only cut off; and
+waiting for a member to be lost while this node stays linked (:func:`wait_lost`).
 
-Both sides of a step and the program host ask it after a call was not delivered; it polls
-(zenoh offers no event for "links back"), at most every 50 ms, only while a call has failed.
+Both sides of a step and the program host ask :func:`wait_reachable` after a call was not
+delivered; it polls (zenoh offers no event for "links back"), at most every 50 ms, only while a
+call has failed. :func:`wait_lost` follows the membership's events: it costs nothing while the
+team stays whole.
 """
 
 from __future__ import annotations
@@ -9,8 +12,10 @@ from __future__ import annotations
 import asyncio
 import logging
 import time
-from collections.abc import Sequence
+from collections.abc import AsyncGenerator, Iterable, Sequence
 from typing import TYPE_CHECKING
+
+from ._step import LOST_GRACE
 
 if TYPE_CHECKING:
     from .._node import Node
@@ -53,3 +58,28 @@ async def wait_reachable(
     back = wanted <= node.membership.members()
     log.info("%s: links back; %s %s", node.name, sorted(wanted), "back" if back else "gone")
     return back
+
+
+async def wait_lost(
+    node: Node, members: Iterable[str], grace: float = LOST_GRACE
+) -> frozenset[str]:
+    """Once one or more of ``members`` (this node's own name aside) have been gone for
+    ``grace`` seconds while this node is linked, as the designated member counts a loss: who.
+
+    A member gone already when this is called counts from the call. While this node is cut
+    off from every other, nobody is lost (it stalls, as the steps do)."""
+    others = frozenset(members) - {node.name}
+    changes = node.membership.events()
+    try:
+        while True:
+            missing = {m for m in others if m not in node.membership}
+            if missing and node.connected():
+                await asyncio.sleep(grace)
+                lost = frozenset(m for m in missing if m not in node.membership)
+                if lost and node.connected():
+                    return lost
+            else:
+                await anext(changes)  # (registered as it first waits: no change is missed)
+    finally:
+        if isinstance(changes, AsyncGenerator):
+            await changes.aclose()

@@ -120,6 +120,10 @@ def _future() -> asyncio.Future[Decision]:
     return asyncio.get_running_loop().create_future()
 
 
+def _owned() -> asyncio.Future[None]:
+    return asyncio.get_running_loop().create_future()
+
+
 @dataclass
 class Step:
     """What a node knows of step ``(run, step)``: its decision, once known here (decided here,
@@ -131,7 +135,7 @@ class Step:
     step: int
     decision: asyncio.Future[Decision] = field(default_factory=_future)
     served: bool = False  # this node serves the step as its designated member (or all-to-all)
-    kind: str = "and"  # "or" or "and" (what the designated member does once it decides)
+    kind: str = "and"  # "or", "and", or "and_all" (an all-to-all AND's receiver)
     members: frozenset[str] = frozenset()
     joined: set[str] = field(default_factory=set)
     claims: list[tuple[str, Any, float | None]] = field(default_factory=list)
@@ -144,5 +148,8 @@ class Step:
     beyond: dict[str, float] = field(default_factory=dict)  # member: a time it went past
     finished: dict[str, float] = field(default_factory=dict)  # member: its answered finish
     asking: dict[str, asyncio.Task[None]] = field(default_factory=dict)  # or_passed under way
+    owner: asyncio.Task[None] | None = None  # owns the step's tasks until it is decided
+    owned: asyncio.Future[None] = field(default_factory=_owned)  # the owner's group is open
+    tasks: asyncio.TaskGroup | None = None  # the owner's group (the step's questions)
     questions: int = 0  # or_passed calls sent from here (two messages each)
     gone: set[str] = field(default_factory=set)  # members lost during the step (on_gone)

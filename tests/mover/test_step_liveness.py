@@ -1,0 +1,176 @@
+"""No member waits forever in a step: a member signalled at each phase boundary of an AND and of
+an OR, over real processes on 127.0.0.1 (tests/helpers/step_member.py announces the phase at
+the moment it is signalled, so no sleep decides what is tested).
+
+Every other member ends within the loss bound plus 2 s with ``MemberLost`` (the step, or the
+barrier after it for a member that got through the step); a member SIGSTOPped past its lease
+and resumed finds its run ended, and takes part in the next. One team of three (a, b, c: "a" is
+the designated member) serves every case; a killed victim is started again for the next.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import signal
+import time
+from collections.abc import AsyncIterator
+from dataclasses import dataclass
+from typing import Any
+
+import pytest
+import pytest_asyncio
+
+from mover import Node, launch
+from mover._collective import Policy
+from mover._collective._step import LOST_GRACE
+from mover._config import NodeConfig
+from mover.testing import first_line
+from tests.helpers.procs import Cluster, cluster
+
+pytestmark = [pytest.mark.processes, pytest.mark.asyncio(loop_scope="module")]
+
+MEMBER = "tests.helpers.step_member"
+NAMES = ["a", "b", "c"]
+LOSS_BOUND = NodeConfig().lease_ms / 1000 + LOST_GRACE  # a stalled member; a dead one: sooner
+ENDS_WITHIN = LOSS_BOUND + 2.0
+STOPPED = LOSS_BOUND + 1.0  # a SIGSTOP past its lease and the team's grace
+
+
+@dataclass
+class Team:
+    c: Cluster
+    node: Node
+    procs: dict[str, asyncio.subprocess.Process]
+
+    async def restart(self, name: str) -> None:
+        self.procs[name] = await self.c.start(MEMBER, "--name", name, label=name)
+        await self.node.membership.wait_for([name], timeout=20)
+
+
+@pytest_asyncio.fixture(scope="module", loop_scope="module")
+async def team() -> AsyncIterator[Team]:
+    async with cluster() as c, c.launcher() as node:
+        procs = await asyncio.gather(*(c.start(MEMBER, "--name", n, label=n) for n in NAMES))
+        await node.membership.wait_for(NAMES, timeout=30)
+        yield Team(c, node, dict(zip(NAMES, procs, strict=True)))
+
+
+async def ended(node: Node, run: str, members: list[str], bound: float) -> dict[str, Any]:
+    """Each member's outcome of ``run`` and when it came (time.monotonic); bounded."""
+
+    async def one(member: str) -> tuple[dict[str, Any], float]:
+        outcome = await node.call(member, "mover.outcome", run, timeout=bound)
+        return outcome, time.monotonic()
+
+    ends = await asyncio.gather(*(one(m) for m in members))
+    return dict(zip(members, ends, strict=True))
+
+
+async def signal_at(t: Team, run: str, victim: str, phase: str, sig: int) -> float:
+    """Wait for ``victim`` to announce ``phase`` of ``run``; signal it at once; when."""
+    line = await first_line(t.procs[victim], lambda s: s.startswith(f"PHASE {run} "), 20)
+    assert line is not None and line.split()[2] == phase, line
+    signalled = time.monotonic()
+    t.c.kill(t.procs[victim], sig)
+    return signalled
+
+
+# (kind, phase, victim, signal, hold): each phase of each kind once, each signal on each kind,
+# the designated member ("a") and another ("c") as victims; the others hold in their operation
+# until told (or, with a ``hold`` in seconds, reach the step after the victim is lost).
+HOLD = 3600.0
+CASES = [
+    ("and", "before", "c", signal.SIGTERM, HOLD),
+    ("and", "enter", "c", signal.SIGKILL, HOLD),
+    ("and", "enter", "c", signal.SIGINT, 1.5),  # search and rescue's "gathering" (issue 22)
+    ("and", "inside", "a", signal.SIGINT, HOLD),
+    ("and", "after", "c", signal.SIGKILL, HOLD),
+    ("and", "deciding", "a", signal.SIGKILL, HOLD),
+    ("or", "before", "a", signal.SIGINT, HOLD),
+    ("or", "enter", "c", signal.SIGTERM, HOLD),
+    ("or", "inside", "a", signal.SIGKILL, HOLD),
+    ("or", "after", "c", signal.SIGINT, HOLD),
+    ("or", "deciding", "a", signal.SIGTERM, HOLD),
+]
+
+
+@pytest.mark.parametrize(
+    ("kind", "phase", "victim", "sig", "hold"),
+    CASES,
+    ids=[f"{k}-{p}-{v}-{signal.Signals(s).name}-{h:g}" for k, p, v, s, h in CASES],
+)
+async def test_a_member_killed_at_a_phase_boundary_ends_the_step_for_all(
+    team: Team, kind: str, phase: str, victim: str, sig: int, hold: float
+) -> None:
+    run = f"{kind}-{phase}-{victim}-{sig}-{hold:g}"
+    args = {"kind": kind, "victim": victim, "phase": phase, "hold": hold}
+    await launch(team.node, "step", NAMES, args, run=run, wait=False)
+    signalled = await signal_at(team, run, victim, phase, sig)
+    others = [n for n in NAMES if n != victim]
+    try:
+        ends = await ended(team.node, run, others, ENDS_WITHIN + 5)
+    finally:
+        await team.node.membership.wait_gone(victim, timeout=10)
+        await team.restart(victim)
+    for member, (outcome, at) in ends.items():
+        print(f"{run}: {member} ended after {at - signalled:.2f} s: {outcome}")
+        assert "MemberLost" in outcome.get("error", ""), (member, outcome)
+        assert f"'{victim}'" in outcome["error"], (member, outcome)
+        assert at - signalled < ENDS_WITHIN, (member, at - signalled)
+
+
+@pytest.mark.parametrize(
+    ("kind", "victim", "policy"),
+    [("and", "c", "fail"), ("or", "a", "fail"), ("and", "c", "survivors")],
+)
+async def test_a_member_stopped_past_its_lease_is_lost_and_not_left_busy(
+    team: Team, kind: str, victim: str, policy: Policy
+) -> None:
+    """The others end with MemberLost (``survivors``: they go on without it, and end); the
+    resumed member finds its run ended, and the whole team takes the next run."""
+    run = f"stop-{kind}-{victim}-{policy}"
+    hold = HOLD if policy == "fail" else 0.0
+    args = {"kind": kind, "victim": victim, "phase": "stop", "hold": hold}
+    await launch(team.node, "step", NAMES, args, run=run, wait=False, policy=policy)
+    signalled = await signal_at(team, run, victim, "stop", signal.SIGSTOP)
+    others = [n for n in NAMES if n != victim]
+    try:
+        ends = await ended(team.node, run, others, ENDS_WITHIN + 5)
+        await asyncio.sleep(max(0.0, signalled + STOPPED - time.monotonic()))
+    finally:
+        team.procs[victim].send_signal(signal.SIGCONT)
+    for member, (outcome, at) in ends.items():
+        print(f"{run}: {member} ended after {at - signalled:.2f} s: {outcome}")
+        if policy == "fail":
+            assert "MemberLost" in outcome.get("error", ""), (member, outcome)
+        else:
+            assert outcome.get("result", "").startswith("ok"), (member, outcome)
+        assert at - signalled < ENDS_WITHIN, (member, at - signalled)
+    await team.node.membership.wait_for([victim], timeout=10)
+    resumed = await ended(team.node, run, [victim], ENDS_WITHIN + 5)
+    outcome, at = resumed[victim]
+    print(f"{run}: {victim} (resumed) ended {at - signalled - STOPPED:.2f} s after: {outcome}")
+    assert "MemberLost" in outcome.get("error", ""), outcome
+    # Not left busy: the whole team takes the next run.
+    outcomes = await asyncio.wait_for(
+        launch(team.node, "step", NAMES, {"kind": "and", "victim": "", "phase": "", "hold": 0},
+               run=f"after-{run}"),
+        20,
+    )  # fmt: skip
+    assert all(o.get("result", "").startswith("ok") for o in outcomes.values()), outcomes
+
+
+async def test_survivors_go_on_without_a_member_killed_before_the_step(team: Team) -> None:
+    run = "survivors-before-c"
+    args = {"kind": "and", "victim": "c", "phase": "before", "hold": 0}
+    await launch(team.node, "step", NAMES, args, run=run, wait=False, policy="survivors")
+    signalled = await signal_at(team, run, "c", "before", signal.SIGKILL)
+    try:
+        ends = await ended(team.node, run, ["a", "b"], ENDS_WITHIN + 5)
+    finally:
+        await team.node.membership.wait_gone("c", timeout=10)
+        await team.restart("c")
+    for member, (outcome, at) in ends.items():
+        print(f"{run}: {member} ended after {at - signalled:.2f} s: {outcome}")
+        assert outcome.get("result", "").startswith("ok"), (member, outcome)
+        assert at - signalled < ENDS_WITHIN, (member, at - signalled)
