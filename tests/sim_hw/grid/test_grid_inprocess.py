@@ -37,33 +37,33 @@ def corridor_server(**kw: Any) -> GridServer:
 async def test_a_round_waits_for_every_robot_and_applies_actions_in_name_order() -> None:
     server = corridor_server(exclusive=True, expect=2)
     a, _b = await asyncio.gather(
-        server.join("a", {"start": [1, 1]}), server.join("b", {"start": [1, 3]})
+        server.door.join("a", {"start": [1, 1]}), server.door.join("b", {"start": [1, 3]})
     )
     assert a["readings"]["round"] == 0 and a["readings"]["hears"] == ["b"]
     assert [n[1] for n in a["readings"]["around"]] == [OBSTACLE, FREE, OBSTACLE, OBSTACLE]
-    step_a = asyncio.ensure_future(server.step("a", 0, {"move": EAST, "value": 7}))
+    step_a = asyncio.ensure_future(server.door.step("a", 0, {"move": EAST, "value": 7}))
     await asyncio.sleep(0)
     assert not step_a.done() and server.round == 0
-    ra, rb = await asyncio.gather(step_a, server.step("b", 0, {"move": WEST}))
+    ra, rb = await asyncio.gather(step_a, server.door.step("b", 0, {"move": WEST}))
     # a moved first into the middle cell; b's move into it then failed
     assert ra["moved"] and not rb["moved"] and server.round == 1
     assert server.world.marks[server.grid.index((1, 1))] == 7
     assert ra["around"][EAST][1] == OCCUPIED
-    again = await server.step("a", 0, {"move": EAST})  # a retry of a done round
+    again = await server.door.step("a", 0, {"move": EAST})  # a retry of a done round
     assert again is ra
 
 
 @pytest.mark.parametrize("turns", ["together", "sequential"])
 async def test_a_cancelled_step_does_not_fail_its_retry(turns: str) -> None:
     server = corridor_server(expect=2, turns=turns)
-    await asyncio.gather(server.join("a", {}), server.join("b", {}))
-    given_up = asyncio.ensure_future(server.step("a", 0, {}))
+    await asyncio.gather(server.door.join("a", {}), server.door.join("b", {}))
+    given_up = asyncio.ensure_future(server.door.step("a", 0, {}))
     await asyncio.sleep(0)
-    retry = asyncio.ensure_future(server.step("a", 0, {}))
+    retry = asyncio.ensure_future(server.door.step("a", 0, {}))
     await asyncio.sleep(0)
     given_up.cancel()  # the caller gave the first call up; its retry must not lose the round
     await asyncio.sleep(0)
-    await server.step("b", 0, {})
+    await server.door.step("b", 0, {})
     assert (await asyncio.wait_for(retry, 2))["round"] == 1
     assert given_up.cancelled()
 
@@ -72,13 +72,13 @@ async def test_a_silent_robot_is_dropped_after_the_timeout(
     caplog: pytest.LogCaptureFixture,
 ) -> None:
     server = corridor_server(expect=2, timeout=0.05)
-    await asyncio.gather(server.join("a", {}), server.join("b", {}))
+    await asyncio.gather(server.door.join("a", {}), server.door.join("b", {}))
     with caplog.at_level(logging.WARNING, logger="sim_hw.grid._server"):
-        reply = await asyncio.wait_for(server.step("a", 0, {}), 2)
-    assert reply["round"] == 1 and server.dropped == ["b"]
+        reply = await asyncio.wait_for(server.door.step("a", 0, {}), 2)
+    assert reply["round"] == 1 and server.door.dropped == ["b"]
     assert "robot b sent no action for round 0" in caplog.text
     with pytest.raises(RobotDropped):
-        await server.step("b", 0, {})
+        await server.door.step("b", 0, {})
 
 
 class _Bus:
