@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+from collections.abc import Awaitable, Callable
 from pathlib import Path
 from typing import Any
 
@@ -11,10 +12,11 @@ import numpy as np
 import pytest
 
 from experiments.maze import run_trial
-from mover import Message
-from programs.explore_maze import explore_maze
+from mover import Message, RunTeam
+from programs.explore_maze import MazeTeam, explore_maze
 from programs.foraging import foraging
-from robots.grid_hal import FREE, OBSTACLE, OCCUPIED
+from robots import Robot
+from robots.grid_hal import FREE, OBSTACLE, OCCUPIED, GridHardware
 from sim_hw.grid import (
     Grid,
     GridServer,
@@ -91,67 +93,85 @@ class _Bus:
         self.members = sorted(names)
 
 
+class _Inbox:
+    def __init__(self, queue: asyncio.Queue[Message]) -> None:
+        self.queue = queue
+
+    async def get(self, timeout: float | None = None) -> Message:
+        return await asyncio.wait_for(self.queue.get(), timeout)
+
+    async def __aenter__(self) -> _Inbox:
+        return self
+
+    async def __aexit__(self, *exc: object) -> None:
+        pass
+
+
 class _Node:
+    """A :class:`MazeNode` on the bus: everyone hears all (the world says who is in range)."""
+
     def __init__(self, bus: _Bus, name: str) -> None:
         self.bus, self.name, self.membership = bus, name, set(bus.members)
 
-    def subscribe(self, topic: str) -> Any:
-        queue = self.bus.queues[self.name]
+    def subscribe(self, topic: str) -> _Inbox:
+        return _Inbox(self.bus.queues[self.name])
 
-        class Sub:
-            async def get(self, timeout: float | None = None) -> Message:
-                return await asyncio.wait_for(queue.get(), timeout)
-
-            async def __aenter__(self) -> Any:
-                return self
-
-            async def __aexit__(self, *exc: object) -> None:
-                pass
-
-        return Sub()
-
-    async def broadcast(self, topic: str, data: Any, **kw: Any) -> None:
+    async def broadcast(
+        self, topic: str, data: Any, *, range: float | None = None, reliable: bool = False
+    ) -> None:
         for name, queue in self.bus.queues.items():
             if name != self.name:
                 queue.put_nowait(Message(self.name, topic, data, None, None, 0.0))
 
 
 class _Team:
-    def __init__(self, bus: _Bus, me: str) -> None:
-        self.bus, self.me, self.members, self.run = bus, me, bus.members, "test"
+    """A :class:`MazeTeam` on the bus: its ``and`` step waits for every member's value."""
 
-    async def distributed_and(self, op: Any) -> dict[str, Any]:
-        self.bus.values[self.me] = await op()
+    def __init__(self, bus: _Bus, me: str) -> None:
+        self.bus, self.me, self.members, self.run, self.seed = bus, me, bus.members, "test", 0
+        self.node = _Node(bus, me)
+
+    async def distributed_and(self, operation: Callable[[], Awaitable[Any]]) -> dict[str, Any]:
+        self.bus.values[self.me] = await operation()
         if len(self.bus.values) == len(self.members):
             self.bus.all_in.set()
         await self.bus.all_in.wait()
         return dict(self.bus.values)
 
 
-class _Robot:
-    def __init__(self, name: str, hw: Any, node: _Node) -> None:
-        self.id, self.hw, self.node, self.log = name, hw, node, logging.getLogger(name)
+def _a_run_team_is_a_maze_team(team: RunTeam) -> MazeTeam:
+    """What the programs ask of a team, a real one has (mypy checks this)."""
+    return team
+
+
+Program = Callable[..., Awaitable[dict[str, Any]]]
+"""A grid program: ``program(robot, team, **args)``."""
 
 
 async def _run_team(
-    server: GridServer, names: list[str], specs: list[dict[str, Any]], program: Any, **args: Any
+    server: GridServer,
+    names: list[str],
+    specs: list[dict[str, Any]],
+    program: Program,
+    **args: Any,
 ) -> list[dict[str, Any]]:
     hws = await asyncio.gather(
         *(in_process(server, n, s) for n, s in zip(names, specs, strict=True))
     )
 
-    async def idle(hw: Any) -> None:
+    async def idle(hw: GridHardware) -> None:
         while True:
             await hw.clock.tick()
 
     idles = [asyncio.ensure_future(idle(hw)) for hw in hws]
     bus = _Bus(names)
+    teams: list[MazeTeam] = [_Team(bus, n) for n in names]  # what the programs ask of a team
     try:
         return list(
             await asyncio.gather(
                 *(
-                    program(_Robot(n, hw, _Node(bus, n)), _Team(bus, n), **args)
-                    for n, hw in zip(names, hws, strict=True)
+                    program(Robot(n, hw), team, **args)
+                    for n, hw, team in zip(names, hws, teams, strict=True)
                 )
             )
         )
