@@ -55,16 +55,17 @@ def _arena(n: int) -> WorldSpec:
 
 
 class _Timer:
-    """An on_tick hook: wall time of the first and the last tick."""
+    """A hook on a door's ``on_tick``: wall time of ``world``'s first and last tick."""
 
-    def __init__(self) -> None:
+    def __init__(self, world: World) -> None:
+        self.world = world
         self.first: float | None = None
         self.first_t = 0.0
         self.last = 0.0
         self.last_t = 0.0
 
-    def __call__(self, world: World, commands: Mapping[str, Mapping[str, Any]]) -> None:
-        now = time.perf_counter()
+    def __call__(self, commands: Mapping[str, Mapping[str, Any]]) -> None:
+        now, world = time.perf_counter(), self.world
         if self.first is None:
             self.first, self.first_t = now, world.time
         self.last, self.last_t = now, world.time
@@ -76,8 +77,9 @@ class _Timer:
 
 async def world_alone(n: int, seconds: float) -> float:
     """Real-time factor of n in-process robots for ``seconds`` simulated."""
-    timer = _Timer()
-    server = WorldServer(World(_arena(n), seed=1), expect=n, on_tick=timer)
+    server = WorldServer(World(_arena(n), seed=1), expect=n)
+    timer = _Timer(server.world)
+    server.door.on_tick.append(timer)
     ticks = round(seconds / 0.1)
 
     async def robot(i: int) -> None:
@@ -90,7 +92,7 @@ async def world_alone(n: int, seconds: float) -> float:
             await hw.clock.tick()
 
     await asyncio.gather(*(robot(i) for i in range(n)))
-    await server.aclose()
+    await server.door.aclose()
     return timer.rtf()
 
 
@@ -99,8 +101,9 @@ async def processes(n: int, seconds: float, *, frames: bool = True, router: bool
     the world's included, a client of one router process; else a peer mesh)."""
     team, port = TeamCredentials.generate("bench"), free_port()
     endpoint = f"tcp/127.0.0.1:{port}"
-    timer = _Timer()
-    server = WorldServer(World(_arena(n), seed=1), expect=n, on_tick=timer, timeout=10.0)
+    server = WorldServer(World(_arena(n), seed=1), expect=n, timeout=10.0)
+    timer = _Timer(server.world)
+    server.door.on_tick.append(timer)
     if router:
         config = theirs = NodeConfig(mode="client", listen=(), connect=(endpoint,))
     else:
@@ -134,7 +137,7 @@ async def _walk(
     timer: _Timer,
 ) -> float:
     async with Node("world", team=team, kind="world", config=config) as node:
-        serve(node, server, frames=frames)
+        serve(node, server.door, frames=frames)
         procs = [
             await asyncio.create_subprocess_exec(
                 sys.executable,
@@ -167,7 +170,7 @@ async def _walk(
         failed = [p.returncode for p in procs if p.returncode]
         if failed:
             raise RuntimeError(f"{len(failed)} walkers failed: {results[0][1].decode()[-500:]}")
-        await server.aclose()
+        await server.door.aclose()
     return timer.rtf()
 
 

@@ -6,8 +6,9 @@ its :class:`TeamCredentials` (the team's name and key); programs (:class:`Progra
 :func:`launch`, and ``PROGRESS_TOPIC``, the topic under which members report a run's progress:
 ``f"{PROGRESS_TOPIC}/{run}"``), each run of which gets its :class:`RunTeam` (the members of the
 run and the collectives ``distributed_or`` / ``distributed_and``, in simulated time over a
-:class:`RunClock`); the errors, and :class:`ExpectedFault`, the mark of a fault that is reported
-in one line rather than as a bug. Everything else lives in private modules; the command-line
+:class:`RunClock`); the errors (:class:`FileError` the base of every file's, in ``sim_hw`` too),
+and :class:`ExpectedFault`, the mark of a fault that is reported in one line rather than as a
+bug. Everything else lives in private modules; the command-line
 helpers shared by every process are in :mod:`mover.cli`.
 
 Deprecated (they warn, and go in the next release): ``Team`` (now :class:`TeamCredentials`),
@@ -30,6 +31,7 @@ from ._exceptions import (
     CallTimeout,
     ConfigError,
     ExpectedFault,
+    FileError,
     MemberLost,
     MoverError,
     NameTaken,
@@ -58,6 +60,7 @@ __all__ = [
     "CallTimeout",
     "ConfigError",
     "ExpectedFault",
+    "FileError",
     "FixedLocator",
     "IdleClock",
     "Locator",

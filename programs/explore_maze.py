@@ -26,13 +26,17 @@ and starts it takes exactly as many rounds as the in-process run.
 from __future__ import annotations
 
 import asyncio
+import logging
 import time
+from collections.abc import Container
+from contextlib import AbstractAsyncContextManager
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
-from mover import pack
+from mover import Message, pack
+from robots import Robot
 from robots.explore import (
     EXCHANGES,
     FREE,
@@ -47,7 +51,7 @@ from robots.explore import (
 )
 from robots.grid_hal import GridHardware, direction_of
 
-from .foraging import member_index, start_round
+from .foraging import GridTeam, member_index, start_round
 
 TOPIC = "maze"
 #: How long a robot waits for one member's broadcast of a round before going on without it.
@@ -57,18 +61,57 @@ HEAR_TIMEOUT = 10.0
 Key = tuple[int, int]  # (round, exchange within the round)
 
 
+class Inbox(Protocol):
+    """Messages on a topic, as a subscription gives them (a ``mover`` subscription is one)."""
+
+    async def get(self, timeout: float | None = None) -> Message:
+        """The next message (``TimeoutError`` after ``timeout`` s)."""
+
+
+class MazeNode(Protocol):
+    """What the maze program asks of its node: a :class:`mover.Node` is one."""
+
+    @property
+    def membership(self) -> Container[str]:
+        """Who is in the team now."""
+
+    def subscribe(self, topic: str) -> AbstractAsyncContextManager[Inbox]:
+        """The messages on ``topic`` while the context is open."""
+
+    async def broadcast(
+        self, topic: str, data: Any, *, range: float | None = None, reliable: bool = False
+    ) -> None:
+        """Send ``data`` on ``topic`` to the members within ``range``."""
+
+
+class MazeTeam(GridTeam, Protocol):
+    """What the maze program asks of its team: a :class:`mover.RunTeam` is one."""
+
+    @property
+    def run(self) -> str:
+        """The run's name (its broadcasts' topic)."""
+
+    @property
+    def node(self) -> MazeNode:
+        """This member's node."""
+
+
 async def _hear(
-    robot: Any, sub: Any, inbox: dict[Key, dict[str, Any]], round: Key, expected: set[str]
+    node: MazeNode,
+    log: logging.Logger,
+    sub: Inbox,
+    inbox: dict[Key, dict[str, Any]],
+    round: Key,
+    expected: set[str],
 ) -> dict[str, dict[str, Any]]:
     """The broadcasts of exchange ``round`` from ``expected``; later ones are kept for theirs."""
-    node = robot.node
     got = inbox.pop(round, {})
     deadline = time.monotonic() + HEAR_TIMEOUT
     while True:
         missing = {m for m in expected - set(got) if m in node.membership}
         if not missing or time.monotonic() > deadline:
             if missing:
-                robot.log.warning("round %d: no broadcast from %s", round, sorted(missing))
+                log.warning("round %d: no broadcast from %s", round, sorted(missing))
             return {s: m for s, m in got.items() if s in expected}
         try:
             msg = await sub.get(timeout=0.25)
@@ -91,8 +134,8 @@ def map_text(agent: ExplorerAgent) -> str:
 
 
 async def explore_maze(
-    robot: Any,
-    team: Any,
+    robot: Robot[GridHardware],
+    team: MazeTeam,
     method: str = "cu_lvp",
     seed: int | None = None,
     starts: list[list[int]] | None = None,
@@ -112,7 +155,7 @@ async def explore_maze(
     """
     if not starts or not shape:
         raise ValueError("starts and shape are needed (launch data: the team's start cells)")
-    hw: GridHardware = robot.hw
+    hw, node = robot.hw, team.node
     n = len(team.members)
     if len(starts) != n:
         raise ValueError(f"{len(starts)} starts for {n} members")
@@ -133,13 +176,13 @@ async def explore_maze(
 
     async def send(data: dict[str, Any]) -> int:
         """Broadcast to the members in radio range; the bytes of the agent's message."""
-        await robot.node.broadcast(
+        await node.broadcast(
             topic, data, range=reach if reach != float("inf") else None, reliable=True
         )
         return len(pack(data["agent"]))
 
     # subscribed before the start step: no member broadcasts before every one listens
-    async with robot.node.subscribe(topic) as sub, hw.clock.owned(at=await start_round(hw, team)):
+    async with node.subscribe(topic) as sub, hw.clock.owned(at=await start_round(hw, team)):
         hearers: set[str] = set()
         now = 0
         request = next(plan)
@@ -158,7 +201,7 @@ async def explore_maze(
                 sent += await send({"round": now, "exchange": k, "agent": request.message})
                 if k == 0:
                     hearers = set(radio.in_range())
-                heard = await _hear(robot, sub, inbox, (now, k), hearers)
+                heard = await _hear(node, robot.log, sub, inbox, (now, k), hearers)
                 reply = sorted(heard.values(), key=lambda m: m["id"])
             else:
                 hw.drive.move(direction_of(*request.move))

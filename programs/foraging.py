@@ -10,10 +10,12 @@ says the resources are exhausted (or ``max_rounds`` is reached).
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Awaitable, Callable, Mapping, Sequence
+from typing import Any, Protocol
 
 import numpy as np
 
+from robots import Robot
 from robots.foraging import (
     Action,
     AntAgent,
@@ -32,7 +34,23 @@ START_LEAD = 50
 METHODS = ("cmarking", "marking", "ants")
 
 
-async def start_round(hw: GridHardware, team: Any) -> int:
+class GridTeam(Protocol):
+    """What the grid programs ask of their team: a :class:`mover.RunTeam` is one (a test may
+    hand in a stand-in that needs no network)."""
+
+    @property
+    def members(self) -> Sequence[str]:
+        """Every member's name."""
+
+    @property
+    def seed(self) -> int:
+        """The run's seed."""
+
+    async def distributed_and(self, operation: Callable[[], Awaitable[Any]]) -> Mapping[str, Any]:
+        """Run ``operation`` on every member; every member's result, by name."""
+
+
+async def start_round(hw: GridHardware, team: GridTeam) -> int:
     """Agree with the team on the world round at which every member starts (one ``and``
     step): a little after the latest round any member has seen."""
 
@@ -43,7 +61,7 @@ async def start_round(hw: GridHardware, team: Any) -> int:
     return max(int(r) for r in rounds.values()) + START_LEAD
 
 
-def member_index(robot: Any, team: Any) -> int:
+def member_index(robot: Robot[GridHardware], team: GridTeam) -> int:
     """This robot's index in the team (members in name order, as the world applies actions)."""
     return sorted(team.members).index(robot.id)
 
@@ -80,8 +98,8 @@ def act(hw: GridHardware, a: Action) -> None:
 
 
 async def foraging(
-    robot: Any,
-    team: Any,
+    robot: Robot[GridHardware],
+    team: GridTeam,
     method: str = "cmarking",
     seed: int | list[int] | None = None,
     q_max: int = 100,
@@ -96,24 +114,16 @@ async def foraging(
     """
     if method not in METHODS:
         raise ValueError(f"unknown method {method!r}; choose from {', '.join(METHODS)}")
-    hw: GridHardware = robot.hw
+    hw = robot.hw
     seed = team.seed if seed is None else seed
     rng = np.random.default_rng(np.random.SeedSequence(seed)).spawn(len(team.members))[
         member_index(robot, team)
     ]
-    ants = method == "ants"
-    agent: Any = (
-        AntAgent(rng, q_max)
-        if ants
-        else CMarkingAgent(rng, q_max)
-        if method == "cmarking"
-        else ForagingMarkingAgent(rng, q_max)
-    )
-    sense = ant_perception if ants else perception
+    decide = _decider(method, rng, q_max, hw)
     rounds = delivered = moves = 0
     async with hw.clock.owned(at=await start_round(hw, team)):
         while not hw.clock.ended() and not (max_rounds and rounds >= max_rounds):
-            a = agent.step(sense(hw))
+            a = decide()
             act(hw, a)
             carried = hw.gripper.carried()
             await hw.clock.tick()
@@ -122,3 +132,14 @@ async def foraging(
             moves += hw.drive.moved()
             rounds += 1
     return {"rounds": rounds, "delivered": delivered, "moves": moves, "finished": hw.clock.ended()}
+
+
+def _decider(
+    method: str, rng: np.random.Generator, q_max: int, hw: GridHardware
+) -> Callable[[], Action]:
+    """This round's action of a ``method`` agent, from what it perceives on ``hw`` now."""
+    if method == "ants":
+        ant = AntAgent(rng, q_max)
+        return lambda: ant.step(ant_perception(hw))
+    marker = CMarkingAgent(rng, q_max) if method == "cmarking" else ForagingMarkingAgent(rng, q_max)
+    return lambda: marker.step(perception(hw))

@@ -18,7 +18,7 @@ import argparse
 import asyncio
 import logging
 from collections.abc import Callable, Mapping
-from typing import Any, TypeVar
+from typing import Any, Protocol, TypeVar
 
 from mover import MoverError, Node, NodeConfig, TeamCredentials
 from mover.cli import bounded, member_name, positive
@@ -26,8 +26,6 @@ from sim_hw._frames import read_command, readings_frame, topics
 from sim_hw._lockstep import Command, LockstepDoor, RobotDropped
 
 log = logging.getLogger("sim_hw.process")
-
-D = TypeVar("D", bound=LockstepDoor[Any])
 
 COMMAND_QUEUE = 10_000
 """Command frames a world keeps unread at most."""
@@ -191,9 +189,20 @@ class _TickFrames:
             log.warning("tick frame not sent: %s", exc)
 
 
+class Served(Protocol):
+    """A world with its lock-step door (``WorldServer``, ``GridServer``)."""
+
+    @property
+    def door(self) -> LockstepDoor[Any]:
+        """The door robots join and step through."""
+
+
+W = TypeVar("W", bound=Served)
+
+
 async def run_world_process(
-    door: D,
-    export: Callable[[Node, D], None],
+    server: W,
+    export: Callable[[Node, W], None],
     *,
     name: str,
     team: TeamCredentials,
@@ -202,10 +211,12 @@ async def run_world_process(
     quit_when_empty: bool = False,
     ready: Callable[[], None] | None = None,
 ) -> None:
-    """Open a node named ``name``, ``export(node, door)``, and run until the world reaches
-    tick ``until_tick``, until every robot has left (``quit_when_empty``), or until cancelled."""
+    """Open a node named ``name``, ``export(node, server)``, and run until the world reaches
+    tick ``until_tick``, until every robot has left (``quit_when_empty``), or until cancelled;
+    then close the server's door."""
+    door = server.door
     async with Node(name, team=team, kind="world", config=config, unique=True) as node:
-        export(node, door)
+        export(node, server)
         log.info("world serving as %r", name)
         if ready is not None:
             ready()

@@ -5,8 +5,9 @@ Public face (everything else is private and may change):
 * world description — :class:`WorldSpec` and its parts, :func:`load_world`, the generators
   :func:`random_obstacles`, :func:`free_points` and
   :func:`double_corridor` (with :func:`corridor_paths`), and :class:`WorldFileError`;
-* the world — :class:`World` (synchronous, deterministic) and :class:`WorldServer` (its clock:
-  lock-step or real time; robots ``join``, ``step`` and ``leave``);
+* the world — :class:`World` (synchronous, deterministic) and :class:`WorldServer` (a world and
+  its lock-step door, ``server.door``: lock-step or real time; robots ``join``, ``step`` and
+  ``leave`` through it, and hooks on ``door.on_tick`` hear of every tick);
 * backends of ``robots.hal`` — :func:`in_process` and :func:`remote` (over a ``mover.Node``),
   both built on :class:`SimHardware`; of ``robots.stigmergic``'s two kinds in process,
   :func:`eyebot_in_process` and :func:`footbot_in_process`;

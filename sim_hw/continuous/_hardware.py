@@ -312,7 +312,7 @@ async def in_process(
     server: WorldServer, robot_id: str, spec: Mapping[str, Any] | None = None
 ) -> Hardware:
     """Join ``server`` (a :class:`WorldServer` in this process) and return the robot's HAL."""
-    joined, link = await _link.in_process(server, robot_id, spec)
+    joined, link = await _link.in_process(server.door, robot_id, spec)
     return SimHardware(robot_id, joined["spec"], joined["readings"], link).hardware()
 
 

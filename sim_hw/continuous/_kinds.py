@@ -148,7 +148,7 @@ def _kind_of(joined: Mapping[str, Any], robot_id: str, kind: str) -> None:
 
 async def eyebot_in_process(server: WorldServer, robot_id: str) -> EyeBotHardware:
     """Join ``server`` (a ``WorldServer`` in this process) as the eye-bot ``robot_id``."""
-    joined, link = await _link.in_process(server, robot_id, {"kind": EYEBOT})
+    joined, link = await _link.in_process(server.door, robot_id, {"kind": EYEBOT})
     _kind_of(joined, robot_id, EYEBOT)
     return EyeBotSim(robot_id, joined["spec"], joined["readings"], link).eyebot()
 
@@ -157,7 +157,7 @@ async def footbot_in_process(
     server: WorldServer, robot_id: str, spec: Mapping[str, Any] | None = None
 ) -> FootBotHardware:
     """Join ``server`` (a ``WorldServer`` in this process) as the foot-bot ``robot_id``."""
-    joined, link = await _link.in_process(server, robot_id, {**(spec or {}), "kind": FOOTBOT})
+    joined, link = await _link.in_process(server.door, robot_id, {**(spec or {}), "kind": FOOTBOT})
     _kind_of(joined, robot_id, FOOTBOT)
     return FootBotSim(robot_id, joined["spec"], joined["readings"], link).footbot()
 

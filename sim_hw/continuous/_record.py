@@ -69,16 +69,19 @@ def scene_header(world: World) -> dict[str, Any]:
 
 
 class Recorder:
-    """An ``on_tick`` hook for :class:`WorldServer` that writes every ``every``-th tick."""
+    """Writes ``world``'s run to ``path``, every ``every``-th tick: a hook on the door's
+    ``on_tick`` (``server.door.on_tick.append(recorder)``)."""
 
     def __init__(self, path: str | Path, world: World, every: int = 1) -> None:
         self.path = Path(path)
+        self.world = world
         self.every = max(1, every)
         self._file: IO[str] = self.path.open("w", encoding="utf-8")
         self._write(scene_header(world))
         self._write({"type": "tick", **world.snapshot(), "commands": {}})
 
-    def __call__(self, world: World, commands: Mapping[str, Mapping[str, Any]]) -> None:
+    def __call__(self, commands: Mapping[str, Mapping[str, Any]]) -> None:
+        world = self.world
         if world.tick % self.every == 0:
             self._write({"type": "tick", **world.snapshot(), "commands": dict(commands)})
 

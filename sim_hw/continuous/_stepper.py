@@ -1,4 +1,4 @@
-"""The pymunk world as the lock-step door drives it, and :class:`WorldServer`, the two together.
+"""The pymunk world as the lock-step door drives it, and :class:`WorldServer`, a world and its door.
 
 :class:`WorldStepper` adapts a :class:`World` to the door's stepper protocol
 (``sim_hw._lockstep``): robots are in the world as soon as they join (``admits_early``) and
@@ -92,14 +92,18 @@ def stepper_for(world: World) -> WorldStepper:
     return WorldStepper(world)
 
 
-class WorldServer(LockstepDoor[WorldStepper]):
-    """Runs a :class:`World` in lock-step or in (scaled) real time for robots that join it.
+class WorldServer:
+    """A :class:`World` and the lock-step door (``door``) that runs it, in lock-step or in
+    (scaled) real time, for the robots that join it.
 
+    Robots join, step and leave through ``server.door`` (:class:`LockstepDoor`): the in-process
+    HAL (:func:`sim_hw.in_process`) and a world process (:func:`serve_world`) take it from
+    there; what runs after every tick (a recorder) is a hook on ``server.door.on_tick``.
     ``expect`` robots must join before a lock-step world starts (0: start at the first join);
     ``timeout`` wall seconds of silence in a tick drop a robot (in process; a world process
     only says so, see ``sim_hw._lockstep``).
     ``on_snapshot(snapshot)`` is called every ``snapshot_every`` ticks (0: never); it may be a
-    coroutine function. ``on_tick(world, commands)`` is called after every tick (a recorder).
+    coroutine function.
     """
 
     def __init__(
@@ -112,23 +116,20 @@ class WorldServer(LockstepDoor[WorldStepper]):
         timeout: float = 2.0,
         snapshot_every: int = 0,
         on_snapshot: Callable[[Snapshot], Any] | None = None,
-        on_tick: Callable[[World, Mapping[str, Command]], None] | None = None,
     ) -> None:
         if speed <= 0:
             raise ValueError("speed must be positive")
-        super().__init__(
+        self.world = world
+        self.door: LockstepDoor[WorldStepper] = LockstepDoor(
             stepper_for(world),
             expect=expect,
             timeout=timeout,
             speed=None if lockstep else speed,
             period=TICK,
         )
-        self.world = world
         self.snapshot_every = snapshot_every
         self.on_snapshot = on_snapshot
-        if on_tick is not None:
-            self.on_tick.append(lambda commands: on_tick(world, commands))
-        self.on_tick.append(self._publish)
+        self.door.on_tick.append(self._publish)
 
     def _publish(self, commands: Mapping[str, Command]) -> None:
         every, send = self.snapshot_every, self.on_snapshot
@@ -136,7 +137,7 @@ class WorldServer(LockstepDoor[WorldStepper]):
             return
         result = send(self.world.snapshot())
         if inspect.isawaitable(result):
-            self.keep(asyncio.ensure_future(_quietly(result)), finish=True)
+            self.door.keep(asyncio.ensure_future(_quietly(result)), finish=True)
 
 
 async def _quietly(awaitable: Awaitable[Any]) -> None:
@@ -147,8 +148,8 @@ async def _quietly(awaitable: Awaitable[Any]) -> None:
 
 
 def serve_world(node: Node, server: WorldServer, *, state_topic: str = STATE_TOPIC) -> None:
-    """Export ``server``'s three calls on ``node`` and send its snapshots to ``state_topic``."""
-    serve(node, server)
+    """Export ``server``'s door on ``node`` and send its snapshots to ``state_topic``."""
+    serve(node, server.door)
     if server.on_snapshot is None and server.snapshot_every:
         send = getattr(node, "broadcast_nowait", None) or node.broadcast
         server.on_snapshot = lambda snap: send(state_topic, snap)

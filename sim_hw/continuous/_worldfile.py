@@ -22,7 +22,7 @@ from typing import TypeVar
 
 import numpy as np
 
-from mover._exceptions import FileError
+from mover import FileError
 from mover._tables import (
     BOOLEAN,
     NAME,

@@ -81,8 +81,9 @@ def run_world(args: argparse.Namespace) -> int:
         expect=args.expect,
         timeout=args.timeout,
         snapshot_every=max(every, 1) if every else 0,
-        on_tick=recorder,
     )
+    if recorder is not None:
+        server.door.on_tick.append(recorder)
     try:
         asyncio.run(
             run_world_process(

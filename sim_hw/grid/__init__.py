@@ -3,8 +3,8 @@
 Free/obstacle cells with 4-neighbour moves (agents may share a cell), a digital floor of integer
 values and colours, resources with quantities, a base, an optional pheromone layer, view rays
 blocked by obstacles and range queries; grid files (text or JSON) and seeded generators; the
-Linardakis maze (generator, files, the star view); the lock-step :class:`GridServer` over a
-grid world and its robot-side backend (:func:`in_process`, :func:`connect`).
+Linardakis maze (generator, files, the star view); the :class:`GridServer` (a grid world and its
+lock-step door, ``server.door``) and its robot-side backend (:func:`in_process`, :func:`connect`).
 
 Example::
 

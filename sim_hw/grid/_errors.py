@@ -3,14 +3,14 @@
 Exception tree::
 
     mover.ConfigError (a ValueError)
-    └── FileError          a file is wrong: .source, .line, .where, .problem (mover._tables)
+    └── mover.FileError    a file is wrong: .source, .line, .where, .problem
         ├── GridFileError  a grid file (text or JSON) that cannot be read
         └── MazeFileError  a maze file that cannot be read
 """
 
 from __future__ import annotations
 
-from mover._exceptions import FileError
+from mover import FileError
 
 
 class GridFileError(FileError):

@@ -312,7 +312,7 @@ async def in_process(
     idle_period: float = 0.0,
 ) -> GridHardware:
     """Join ``server`` (a :class:`~sim_hw.grid.GridServer` in this process)."""
-    joined, link = await _link.in_process(server, robot_id, spec)
+    joined, link = await _link.in_process(server.door, robot_id, spec)
     return GridRobot(
         robot_id, joined["spec"], joined["readings"], link, idle_period=idle_period
     ).hardware()

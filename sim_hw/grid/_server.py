@@ -1,4 +1,4 @@
-"""The grid world as the lock-step door drives it, and :class:`GridServer`, the two together.
+"""The grid world as the lock-step door drives it, and :class:`GridServer`, a grid and its door.
 
 :class:`GridStepper` owns the floor (values, colours, pheromone), the resources and the base of
 a :class:`GridWorld`, plus the robots that joined, each on one cell; the door
@@ -323,11 +323,13 @@ class GridRules(TypedDict, total=False):
     view: int
 
 
-class GridServer(LockstepDoor[GridStepper]):
-    """Runs a grid world in lock-step rounds for the robots that join it (see the module): the
-    door over a :class:`GridStepper`, with the grid's views (round, robots, state, text). What
-    happens after a round is told to the door's ``on_tick`` hooks.
+class GridServer:
+    """A grid world and the lock-step door (``door``) that runs it in rounds for the robots
+    that join it (see the module), with the grid's views (round, robots, state, text).
 
+    Robots join, step and leave through ``server.door`` (:class:`LockstepDoor`): the in-process
+    HAL (:func:`sim_hw.grid.in_process`) and a world process (:func:`serve_grid`) take it from
+    there; what happens after a round is told to the door's ``on_tick`` hooks.
     ``expect`` robots must join before the first round; ``timeout`` wall seconds of silence in
     a round drop a robot (in process; a world process only says so, see ``sim_hw._lockstep``);
     ``turns`` is ``together`` or ``sequential``. The other arguments are :class:`GridStepper`'s.
@@ -342,10 +344,10 @@ class GridServer(LockstepDoor[GridStepper]):
         turns: str = "together",
         **rules: Unpack[GridRules],
     ) -> None:
-        stepper = GridStepper(world, **rules)
-        super().__init__(stepper, expect=expect, timeout=timeout, turns=turns)
         self.world = world
         self.grid = world.grid
+        self.stepper = GridStepper(world, **rules)
+        self.door = LockstepDoor(self.stepper, expect=expect, timeout=timeout, turns=turns)
 
     @property
     def round(self) -> int:
@@ -370,15 +372,15 @@ class GridServer(LockstepDoor[GridStepper]):
             "round": st.round,
             "robots": {n: list(self.grid.cell(b.cell)) for n, b in bots},
             "moves": {n: b.moves for n, b in bots},
-            "dropped": list(self.dropped),
-            "idle": sorted(self.idle_robots),
+            "dropped": list(self.door.dropped),
+            "idle": sorted(self.door.idle_robots),
             "remaining": w.remaining,
             "delivered": w.delivered,
             "carried": sum(b.carried for _, b in bots),
             "observable": int(st.target.sum()),
             "explored": int((st.target & st.seen).sum()),
             "over": st.over(),
-            "turns": self.turns,
+            "turns": self.door.turns,
         }
 
     def snapshot_text(self) -> str:
@@ -391,7 +393,7 @@ class GridServer(LockstepDoor[GridStepper]):
 def serve_grid(node: Node, server: GridServer) -> None:
     """Export ``server``'s calls on ``node``: join, step, leave, and ``state`` and
     ``snapshot`` (the field as text) for tools."""
-    serve(node, server)
+    serve(node, server.door)
 
     def state() -> dict[str, Any]:
         return server.state()

@@ -81,7 +81,7 @@ def build_server(
     timeout: float = 5.0,
     until: str | None = None,
     turns: str = "together",
-) -> Any:
+) -> GridServer:
     """The :class:`~sim_hw.grid._server.GridServer` that FILE and the layout describe."""
     import numpy as np
 
@@ -205,22 +205,22 @@ def run(args: argparse.Namespace) -> int:
 
         last: list[int] = []
 
-        def on_round(s: Any) -> None:  # idle rounds change nothing: no snapshot of them
-            if s.round % every == 0:
-                w = s.world
+        def on_round(_commands: object) -> None:  # idle rounds change nothing: no snapshot
+            if server.round % every == 0:
+                w = server.world
                 mark = hash(
                     (
                         tuple(w.marks),
                         tuple(w.colours),
                         tuple(w.resources),
-                        tuple(sorted(b.cell for b in s.robots.values())),
+                        tuple(sorted(b.cell for b in server.robots.values())),
                     )
                 )
                 if last != [mark]:
                     last[:] = [mark]
-                    _write_snapshot(s, where)
+                    _write_snapshot(server, where)
 
-        server.on_tick.append(lambda _commands: on_round(server))
+        server.door.on_tick.append(on_round)
     try:
         team, config = TeamCredentials.from_env(), NodeConfig.from_env()
     except ValueError as exc:

@@ -4,7 +4,8 @@
 The packages import each other in one direction only, never in a circle: mover <- robots <-
 sim_hw <- experiments, and programs <- mover, robots. Each package's third-party imports are the
 ones its row of the packages table names. ``sim_hw`` takes from ``robots`` only the interface a
-world needs to simulate a robot, never a behaviour. The node's parts never import the node, and
+world needs to simulate a robot, never a behaviour. The packages above ``mover`` use three of its
+private modules, named. The node's parts never import the node, and
 one module of mover turns zenoh's threads into asyncio.
 """
 
@@ -55,6 +56,15 @@ ROBOTS_INTERFACE = {
 ROBOTS_MESSAGES = {
     "robots.stigmergic._eyebot": {"Goal", "Instruction"},
     "robots.stigmergic._footbot": {"Heard"},
+}
+
+#: The private modules of mover that the packages above it may use (docs/architecture.md says
+#: why): the table reader, a finished task's error, and ``mover up``'s plan for ``mover demo``.
+MOVER_INTERNALS = {
+    "robots": {"mover._futures"},
+    "sim_hw": {"mover._tables", "mover._keylines", "mover._futures"},
+    "programs": set(),
+    "experiments": {"mover._up"},
 }
 
 #: The parts a node is made of (``mover._node`` gives each its SessionState).
@@ -179,6 +189,19 @@ def test_sim_hw_takes_only_the_robots_interface_never_a_behaviour() -> None:
         allowed = module in ROBOTS_INTERFACE or name in ROBOTS_MESSAGES.get(module, set())
         assert allowed, f"{sorted(places)}: {module}.{name} is not robots' interface"
         assert not _is_behaviour(module, name), f"{sorted(places)}: {module}.{name}"
+
+
+def test_the_packages_above_mover_use_only_its_named_internals() -> None:
+    seen = set()
+    for package, internals in MOVER_INTERNALS.items():
+        for path in _files(package):
+            for line, module in imports(path):
+                parts = module.split(".")
+                if parts[0] == "mover" and any(p.startswith("_") for p in parts[1:]):
+                    seen.add(module)
+                    top = ".".join(parts[:2])
+                    assert top in internals, f"{_where(path)}:{line} imports {module}"
+    assert "mover._tables" in seen, "the check sees the imports of mover's internals"
 
 
 def test_the_behaviour_check_sees_through_re_exports() -> None:

@@ -143,7 +143,7 @@ async def test_body_procedures_sense_the_devices_there_are() -> None:
     seen = body_procedures(bare)["robot.sense"]()
     assert (seen["sonar"], seen["camera"]) == (None, None)
     procs["robot.stop"]()
-    await server.aclose()
+    await server.door.aclose()
 
 
 async def test_grid_procedures_sense_the_grid() -> None:

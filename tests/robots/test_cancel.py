@@ -43,5 +43,5 @@ async def test_cancelled_procedures_stop_the_motors(demo: WorldSpec, name: str) 
     before = world.pose("ernst")
     await robot.hw.clock.sleep(1.0)
     after = world.pose("ernst")
-    await server.aclose()
+    await server.door.aclose()
     assert math.dist(before[:2], after[:2]) < 0.01 and abs(after[2] - before[2]) < 0.01

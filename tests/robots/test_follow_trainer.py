@@ -34,7 +34,7 @@ async def test_the_trainee_records_one_snapshot_per_place(mesh: Mesh, tmp_path: 
             for hw in hws:  # an idle robot process keeps ticking a lock-step world
                 await idle.enter_async_context(hw.clock.ticking())
             outcomes = await launch(ws, "follow_trainer", ["trainer", "trainee"], args, run="train")
-            await server.aclose()
+            await server.door.aclose()
     print(f"\nfollow the trainer: {world.time:.1f} s simulated; {outcomes}")
     assert outcomes["trainer"]["result"] == {"places": list(PLACES), "records": 0}
     assert outcomes["trainee"]["result"] == {"places": list(PLACES), "records": 3}

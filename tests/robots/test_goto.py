@@ -37,7 +37,7 @@ async def test_goto_object_ends_against_the_object(
         f"\ngoto_object ({robot_id}): {robot.hw.clock.now():.1f} s, at ({x:.3f}, {y:.3f}, "
         f"{th:.3f}), expected ({ex:.3f}, {ey:.3f}, {heading:.3f}), {got}"
     )
-    await server.aclose()
+    await server.door.aclose()
     assert got["arrived"] and got["contact"]
     assert math.dist((x, y), (ex, ey)) < 0.08
     assert abs(math.remainder(th - heading, math.tau)) < 0.05
@@ -51,5 +51,5 @@ async def test_goto_point_avoids_an_obstacle_in_the_way(demo: WorldSpec) -> None
     assert await goto_point(robot, (4.0, 1.2), timeout=60.0)
     x, y, _ = world.pose("elvis")
     print(f"\ngoto_point: {robot.hw.clock.now():.1f} s, at ({x:.3f}, {y:.3f})")
-    await server.aclose()
+    await server.door.aclose()
     assert math.dist((x, y), (4.0, 1.2)) < 0.12

@@ -29,12 +29,12 @@ async def _hosted(*names: str) -> AsyncIterator[Hosted]:
         yield server, clock, lost, hws
     finally:
         await clock.aclose()
-        await server.aclose()
+        await server.door.aclose()
 
 
 async def _idle_is(server: WorldServer, idle: list[str]) -> None:
     async with asyncio.timeout(2):
-        while sorted(server.idle_robots) != idle:
+        while sorted(server.door.idle_robots) != idle:
             await asyncio.sleep(0.005)
 
 
@@ -48,7 +48,7 @@ async def test_release_idles_and_engage_returns_once_the_world_waits_for_us() ->
         assert server.world.robots["a"].v == 0.0  # stopped when idling began
         assert clock.now() == pytest.approx(0.5)  # the readings kept coming
         await asyncio.gather(clock.engage(), clock.engage())  # two runs start together
-        assert server.idle_robots == frozenset()
+        assert server.door.idle_robots == frozenset()
         passed = asyncio.ensure_future(clock.passed(0.6))
         await asyncio.gather(a.clock.tick(), b.clock.tick())
         assert not passed.done()  # a command on the readings of t = 0.5 is not past 0.6
@@ -73,7 +73,7 @@ async def test_a_robot_dropped_while_idle_is_lost() -> None:
     async with _hosted("a") as (server, clock, lost, _):
         clock.release()
         await _idle_is(server, ["a"])
-        server.drop("a", "left the team")
+        server.door.drop("a", "left the team")
         assert isinstance(await asyncio.wait_for(lost, 1), RobotDropped)
         with pytest.raises(RobotDropped):
             await clock.engage()

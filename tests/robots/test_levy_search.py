@@ -41,4 +41,4 @@ async def test_each_walk_finds_a_target_in_the_open(method: str) -> None:
     assert world.robots["r0"].v == 0.0  # stopped on the way out
     sightings = robot.hw.camera.sightings() if robot.hw.camera else ()
     assert [s.status for s in sightings if s.id == "t0"] == ["marked"]
-    await server.aclose()
+    await server.door.aclose()

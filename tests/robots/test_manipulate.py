@@ -42,7 +42,7 @@ async def test_pusher_and_steerer_move_the_box_along_the_path(demo: WorldSpec) -
         f"\npusher+steerer: box at ({x:.2f}, {y:.2f}, {th:.3f}) after {t:.1f} s simulated, "
         f"{along(world, path):.2f} m along the path; {results}"
     )
-    await server.aclose()
+    await server.door.aclose()
     assert along(world, path) >= 2.0
     assert abs(y - BOX[1]) < 0.25 and abs(th) < 0.2
     assert all(r["done"] for r in results.values())
@@ -65,7 +65,7 @@ async def test_a_curved_path(demo: WorldSpec) -> None:
     )
     x, y, th = world.box_pose("victim")
     print(f"\ncurved path: box at ({x:.2f}, {y:.2f}, {th:.3f}), path ends at (7.1, 3.8)")
-    await server.aclose()
+    await server.door.aclose()
     assert math.dist((x, y), (BOX[0] + 2.6, BOX[1] + 0.8)) < 0.6
 
 
@@ -79,6 +79,6 @@ async def test_one_robot_alone_does_not_translate_the_box(demo: WorldSpec) -> No
         f"\npusher alone: box at ({x:.2f}, {y:.2f}, {th:.3f}) after 15 s, "
         f"{along(world, path):.2f} m along the path; {result}"
     )
-    await server.aclose()
+    await server.door.aclose()
     assert along(world, path) < 0.5  # two robots go 3 m in ~10 s; alone it only pivots
     assert not result["done"]

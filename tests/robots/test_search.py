@@ -50,7 +50,7 @@ async def test_search_finds_the_box_and_ignores_walls_and_immovables(
         terminator=lambda: robot.hw.clock.now() > 600,
     )
     print(f"\nsearch ({robot_id}, seed {seed}): {robot.hw.clock.now():.1f} s, checks {checks}")
-    await server.aclose()
+    await server.door.aclose()
     assert found is not None and found.object_id == "victim"
     assert math.dist(found.location, world.box_pose("victim")[:2]) < 0.15
     assert checks[-1] == ("box", True)
@@ -70,7 +70,7 @@ async def test_search_gives_up_when_the_terminator_says_so(demo: WorldSpec) -> N
         await search(robot, never, lambda: robot.hw.clock.now() > 20.0, rng=random.Random(0))
         is None
     )
-    await server.aclose()
+    await server.door.aclose()
 
 
 # The paper's push test on things placed in front of the robot: a crate one robot can move,
@@ -101,7 +101,7 @@ async def test_movable_is_the_push_test(target: tuple[float, float], expected: b
     assert await approach(robot, 0.0, limit=1.5)
     assert await movable(robot) is expected
     assert robot.hw.clock.now() < 30
-    await server.aclose()
+    await server.door.aclose()
 
 
 @pytest.mark.parametrize("seed", [SEED])
@@ -127,7 +127,7 @@ async def test_search_with_the_push_test_finds_the_crate(seed: int) -> None:
         terminator=lambda: robot.hw.clock.now() > 900,
     )
     print(f"\nsearch by push: {robot.hw.clock.now():.1f} s, checks {checks}")
-    await server.aclose()
+    await server.door.aclose()
     assert found is not None and found.object_id == "crate"
     assert checks[-1] == ("crate", True)
     assert all(not ok for _, ok in checks[:-1])

@@ -53,7 +53,7 @@ async def test_three_robots_find_gather_and_move_the_box(
             )
             wall = time.perf_counter() - start
             sim = world.time
-            await server.aclose()
+            await server.door.aclose()
     await asyncio.sleep(0.2)  # the last reports
     listener.cancel()
     await asyncio.gather(listener, return_exceptions=True)
@@ -76,4 +76,4 @@ async def test_three_robots_find_gather_and_move_the_box(
     assert sorted(r["role"] for r in results) == ["pusher", "steerer", "steerer"]
     assert {p for *_, p in reports} >= {"searching", "found", "gathering", "pushing", "done"}
     assert along >= 2.0
-    assert not server.dropped
+    assert not server.door.dropped

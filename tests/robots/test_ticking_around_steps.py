@@ -59,7 +59,7 @@ async def test_ticking_around_an_or_and_an_and_runs(caplog: pytest.LogCaptureFix
         finally:
             for clock in clocks:
                 await clock.aclose()
-            await server.aclose()
+            await server.door.aclose()
     assert [winner for winner, _ in results] == ["a", "a"]
     ands = [got for _, got in results]
     assert ands[0] == ands[1]

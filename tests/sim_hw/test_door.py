@@ -29,45 +29,49 @@ def corridor(**kw: Any) -> GridServer:
 
 async def test_an_idle_robot_is_not_waited_for_and_keeps_its_readings() -> None:
     server = corridor(expect=2)
-    await asyncio.gather(server.join("a", {"start": [1, 1]}), server.join("b", {"start": [1, 4]}))
-    assert server.idle("b", {})["round"] == 0
+    await asyncio.gather(
+        server.door.join("a", {"start": [1, 1]}), server.door.join("b", {"start": [1, 4]})
+    )
+    assert server.door.idle("b", {})["round"] == 0
     for n in range(3):
-        got = await asyncio.wait_for(server.step("a", n, {"move": EAST}), 1)
+        got = await asyncio.wait_for(server.door.step("a", n, {"move": EAST}), 1)
         assert got["round"] == n + 1
     assert server.stepper.readings("b")["round"] == 3  # sensed with the others
     assert server.robots["b"].moves == 0 and server.robots["a"].moves == 3  # b stood still
-    assert server.status()["idle"] == ["b"]
-    assert server.wake("b")["round"] == 3
-    stepping = asyncio.ensure_future(server.step("a", 3, {}))
+    assert server.door.status()["idle"] == ["b"]
+    assert server.door.wake("b")["round"] == 3
+    stepping = asyncio.ensure_future(server.door.step("a", 3, {}))
     await asyncio.sleep(0.01)
     assert not stepping.done()  # now the round waits for b again
-    await server.step("b", 3, {"move": WEST})
+    await server.door.step("b", 3, {"move": WEST})
     assert (await stepping)["round"] == 4
 
 
 async def test_a_world_whose_robots_are_all_idle_holds_still() -> None:
     server = corridor(expect=2)
-    await asyncio.gather(server.join("a", {}), server.join("b", {}))
-    server.idle("a", {})
-    server.idle("b", {})
+    await asyncio.gather(server.door.join("a", {}), server.door.join("b", {}))
+    server.door.idle("a", {})
+    server.door.idle("b", {})
     await asyncio.sleep(0.05)
-    assert server.round == 0 and server._deadline is None  # no tick, no timer
-    joined = await asyncio.wait_for(server.join("c", {}), 1)  # a tick boundary: placed at once
+    assert server.round == 0 and server.door._deadline is None  # no tick, no timer
+    joined = await asyncio.wait_for(server.door.join("c", {}), 1)  # a tick boundary: placed at once
     assert joined["readings"]["round"] == 0
-    server.idle("c", {})
+    server.door.idle("c", {})
     assert server.round == 0
-    server.wake("a")
-    await server.step("a", 0, {})
+    server.door.wake("a")
+    await server.door.step("a", 0, {})
     assert server.round == 1
 
 
 async def test_the_first_command_for_a_tick_is_the_one_used() -> None:
     server = corridor(expect=2)
-    await asyncio.gather(server.join("a", {"start": [1, 2]}), server.join("b", {"start": [1, 4]}))
-    first = server.submit("a", 0, {"move": EAST})
-    retry = server.submit("a", 0, {"move": WEST})  # a retry, never a replacement
+    await asyncio.gather(
+        server.door.join("a", {"start": [1, 2]}), server.door.join("b", {"start": [1, 4]})
+    )
+    first = server.door.submit("a", 0, {"move": EAST})
+    retry = server.door.submit("a", 0, {"move": WEST})  # a retry, never a replacement
     assert retry is first
-    await server.step("b", 0, {})
+    await server.door.step("b", 0, {})
     assert (await first)["round"] == 1
     assert server.grid.cell(server.robots["a"].cell) == (1, 3)  # moved east
 
@@ -75,43 +79,43 @@ async def test_the_first_command_for_a_tick_is_the_one_used() -> None:
 @pytest.mark.parametrize("turns", ["together", "sequential"])
 async def test_a_command_from_an_idle_robot_wakes_it(turns: str) -> None:
     server = corridor(expect=2, turns=turns)
-    await asyncio.gather(server.join("a", {}), server.join("b", {}))
-    server.idle("a", {})
-    waiter = server.submit("a", 0, {})
-    assert server.status()["idle"] == []
-    await server.step("b", 0, {})
+    await asyncio.gather(server.door.join("a", {}), server.door.join("b", {}))
+    server.door.idle("a", {})
+    waiter = server.door.submit("a", 0, {})
+    assert server.door.status()["idle"] == []
+    await server.door.step("b", 0, {})
     assert (await asyncio.wait_for(waiter, 1))["round"] in (0, 1)  # sequential: a's next turn
 
 
 async def test_sequential_turns_skip_idle_robots() -> None:
     server = corridor(expect=3, turns="sequential")
-    await asyncio.gather(*(server.join(n, {}) for n in "abc"))
-    server.idle("b", {})
+    await asyncio.gather(*(server.door.join(n, {}) for n in "abc"))
+    server.door.idle("b", {})
 
     async def turns(robot: str) -> None:  # each robot on its own, as processes are
         for n in range(3):
-            await server.step(robot, n, {})
-        server.idle(robot, {})  # then idle: the others' turns do not wait for it
+            await server.door.step(robot, n, {})
+        server.door.idle(robot, {})  # then idle: the others' turns do not wait for it
 
     await asyncio.wait_for(asyncio.gather(turns("a"), turns("c")), 2)
-    assert server.round == 3 and server.status()["idle"] == ["a", "b", "c"]
+    assert server.round == 3 and server.door.status()["idle"] == ["a", "b", "c"]
     still = server.round
     await asyncio.sleep(0.05)
     assert server.round == still
-    assert server.wake("b")["round"] == still
+    assert server.door.wake("b")["round"] == still
 
 
 async def test_joins_wait_for_expect_even_when_those_in_are_idle() -> None:
     server = WorldServer(World(random_obstacles((6.0, 6.0), 0)), expect=2)
-    joining = asyncio.ensure_future(server.join("a"))  # the pymunk world admits early
+    joining = asyncio.ensure_future(server.door.join("a"))  # the pymunk world admits early
     await asyncio.sleep(0)
-    server.idle("a", {"v": 0.0, "w": 0.0, "push": None})  # (its join is answered at the start)
-    assert server.status()["started"] is False and not joining.done()
-    await server.join("b")
-    assert server.status()["started"] is True
+    server.door.idle("a", {"v": 0.0, "w": 0.0, "push": None})  # (its join is answered at the start)
+    assert server.door.status()["started"] is False and not joining.done()
+    await server.door.join("b")
+    assert server.door.status()["started"] is True
     await asyncio.wait_for(joining, 1)
     for n in range(5):
-        await asyncio.wait_for(server.step("b", n, {"v": 0.2, "w": 0.0}), 1)
+        await asyncio.wait_for(server.door.step("b", n, {"v": 0.2, "w": 0.0}), 1)
     assert server.world.tick == 5 and server.world.robots["a"].v == 0.0
 
 
@@ -119,14 +123,14 @@ async def test_without_drop_silent_a_silent_robot_is_waited_for(
     caplog: pytest.LogCaptureFixture,
 ) -> None:
     server = corridor(expect=2, timeout=0.05)
-    server.drop_silent = False  # as a world process has it: liveness decides
-    await asyncio.gather(server.join("a", {}), server.join("b", {}))
+    server.door.drop_silent = False  # as a world process has it: liveness decides
+    await asyncio.gather(server.door.join("a", {}), server.door.join("b", {}))
     caplog.set_level(logging.WARNING, logger="sim_hw.lockstep")
-    stepping = asyncio.ensure_future(server.step("a", 0, {}))
+    stepping = asyncio.ensure_future(server.door.step("a", 0, {}))
     await asyncio.sleep(0.3)
-    assert not stepping.done() and server.dropped == []
+    assert not stepping.done() and server.door.dropped == []
     assert caplog.text.count("waiting for robot b: round 0") == 1  # said once
-    await server.step("b", 0, {})
+    await server.door.step("b", 0, {})
     assert (await stepping)["round"] == 1
 
 
@@ -184,7 +188,7 @@ async def test_passed_returns_once_a_command_went_in_after_the_time() -> None:
     await a.clock.passed(0.0)  # already: at once
     lost = asyncio.ensure_future(a.clock.passed(math.inf))
     await asyncio.sleep(0.01)
-    await server.leave("a")
+    await server.door.leave("a")
     with pytest.raises(RobotDropped):
         await a.clock.tick()
     with pytest.raises(RobotDropped):
@@ -198,7 +202,7 @@ async def test_an_idle_robot_learns_that_it_was_dropped() -> None:
 
     async def idle() -> None:
         async with hw.clock.idling():
-            asyncio.get_running_loop().call_later(0.05, server.drop, "a", "left the team")
+            asyncio.get_running_loop().call_later(0.05, server.door.drop, "a", "left the team")
             await hw.clock.passed(math.inf)
 
     with pytest.raises(RobotDropped):

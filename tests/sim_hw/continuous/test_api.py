@@ -44,11 +44,11 @@ async def test_the_backend_satisfies_every_protocol() -> None:
     }
     for field, protocol in checks.items():
         assert isinstance(getattr(hw, field), protocol), field
-    await server.aclose()
+    await server.door.aclose()
 
 
 async def test_devices_can_be_left_out() -> None:
     server = WorldServer(World(WorldSpec()), expect=1)
     hw = await in_process(server, "r", {"sonar": False, "camera": False, "radio": False})
     assert (hw.sonar, hw.camera, hw.radio) == (None, None, None)
-    await server.aclose()
+    await server.door.aclose()

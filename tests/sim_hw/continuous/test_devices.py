@@ -107,7 +107,7 @@ async def test_odometry_without_noise_follows_the_wheels() -> None:
     # chipmunk moves bodies before it solves joints: a command acts one physics step late
     assert hw.odometry.pose()[2] == pytest.approx(math.pi / 2 * (1 - 1 / 60), abs=1e-6)
     assert hw.odometry.pose() == pytest.approx(world.pose("r"), abs=1e-3)  # midpoint rule
-    await server.aclose()
+    await server.door.aclose()
 
 
 async def test_odometry_noise_drifts_reproducibly() -> None:
@@ -117,7 +117,7 @@ async def test_odometry_noise_drifts_reproducibly() -> None:
         server, hws = await start(world, {"r": spec})
         hws["r"].drive.set_velocity(0.3, 0.0)
         await hws["r"].clock.sleep(5.0)
-        await server.aclose()
+        await server.door.aclose()
         return hws["r"].odometry.pose(), world.pose("r") if "r" in world.robots else (0, 0, 0)
 
     (odom, _), (again, _) = await run(), await run()
@@ -145,7 +145,7 @@ async def test_floor_cells_and_led() -> None:
     assert b.floor.read().colour == "red"
     assert [(s.id, s.status) for s in b.camera.sightings()] == [("a", "found")]
     assert a.radio.position() == pytest.approx(world.pose("a"))
-    await server.aclose()
+    await server.door.aclose()
 
 
 async def asyncio_tick(*hws: Hardware) -> None:

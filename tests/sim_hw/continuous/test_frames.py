@@ -29,7 +29,7 @@ async def _team(expect: int, *names: str, frames: bool = True) -> AsyncIterator[
     async with contextlib.AsyncExitStack() as stack:
         world = await stack.enter_async_context(Node("world", team, kind="world", config=seed))
         nodes = [await stack.enter_async_context(Node(n, team, config=peer)) for n in names]
-        serve(world, server, frames=frames)
+        serve(world, server.door, frames=frames)
         await world.membership.wait_for({"world", *names}, timeout=10)
         yield [server, world, *nodes]
 
@@ -99,7 +99,7 @@ async def test_a_call_the_world_answers_late_is_asked_again() -> None:
         ha, hb = await asyncio.gather(remote(a, "a", call_timeout=0.3), remote(b, "b"))
         ticking = asyncio.ensure_future(_ticks(ha, 1))  # waits on b, longer than 0.3 s
         await asyncio.sleep(1.0)
-        assert not ticking.done() and server.dropped == []
+        assert not ticking.done() and server.door.dropped == []
         await _ticks(hb, 1)
         assert len(await asyncio.wait_for(ticking, 5)) == 1
         assert a.stats["sent.call"] >= 4  # its join, then the step asked three times or more

@@ -47,7 +47,7 @@ async def _robots(server: WorldServer, how: str) -> AsyncIterator[tuple[Any, Any
     async with contextlib.AsyncExitStack() as stack:
         world = await stack.enter_async_context(Node("world", team, kind="world", config=seed))
         a, b = [await stack.enter_async_context(Node(n, team, config=peer)) for n in "ab"]
-        serve(world, server)
+        serve(world, server.door)
         await world.membership.wait_for({"world", "a", "b"}, timeout=10)
         yield await asyncio.gather(remote(a, "a", NOISY), remote(b, "b", NOISY))
 
@@ -93,7 +93,7 @@ async def _walk_with_idling(
     await asyncio.wait_for(asyncio.gather(first(), second()), 30)
     seen["a"].append(server.world.readings("a"))
     seen["b"].append(server.world.readings("b"))
-    await server.aclose()
+    await server.door.aclose()
     return seen
 
 

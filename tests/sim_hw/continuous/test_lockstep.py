@@ -36,7 +36,7 @@ async def _run(
 
     # robots join in the given order; the world re-creates them in id order at the start
     tracks = await asyncio.gather(*(robot(i) for i in order))
-    await server.aclose()
+    await server.door.aclose()
     return [tracks[order.index(i)] for i in range(robots)]
 
 
@@ -55,10 +55,10 @@ async def test_a_silent_robot_is_dropped(caplog: pytest.LogCaptureFixture) -> No
     live.drive.set_velocity(0.2, 0.0)
     await asyncio.wait_for(live.clock.sleep(1.0), timeout=5.0)
     assert time.monotonic() - start < 2.0
-    assert server.dropped == ["silent"]
+    assert server.door.dropped == ["silent"]
     assert "robot silent sent no command for tick 0 within 0.2 s: dropped" in caplog.text
     assert set(server.world.robots) == {"live"}
-    await server.aclose()
+    await server.door.aclose()
 
 
 async def test_joins_are_answered_at_the_start_with_the_readings_then() -> None:
@@ -74,7 +74,7 @@ async def test_joins_are_answered_at_the_start_with_the_readings_then() -> None:
     assert sonar is not None and _ranges(b) == tuple(sonar)
     await asyncio.gather(b.clock.tick(), second.clock.tick())
     assert server.world.tick == 1
-    await server.aclose()
+    await server.door.aclose()
 
 
 async def test_the_first_readings_do_not_depend_on_the_order_of_the_joins() -> None:
@@ -83,7 +83,7 @@ async def test_the_first_readings_do_not_depend_on_the_order_of_the_joins() -> N
         joins = {n: asyncio.ensure_future(in_process(server, n)) for n in order}  # in order
         hws = {n: await asyncio.wait_for(j, 1) for n, j in joins.items()}
         seen = {n: (_ranges(hw), hw.odometry.pose()) for n, hw in sorted(hws.items())}
-        await server.aclose()
+        await server.door.aclose()
         return seen
 
     assert await first_readings("ab") == await first_readings("ba")
@@ -92,7 +92,7 @@ async def test_the_first_readings_do_not_depend_on_the_order_of_the_joins() -> N
 async def test_a_dropped_robot_is_told() -> None:
     server = WorldServer(World(random_obstacles((6.0, 6.0), 0)), expect=1)
     hw = await in_process(server, "r")
-    await server.leave("r")
+    await server.door.leave("r")
     with pytest.raises(RobotDropped):
         await hw.clock.tick()
 
@@ -102,7 +102,7 @@ async def test_concurrent_waiters_share_one_tick() -> None:
     a, b = await asyncio.gather(in_process(server, "a"), in_process(server, "b"))
     await asyncio.gather(a.clock.tick(), a.clock.tick(), a.clock.tick(), b.clock.tick())
     assert server.world.tick == 1
-    await server.aclose()
+    await server.door.aclose()
 
 
 async def test_real_time_runs_at_the_speed_factor() -> None:
@@ -113,7 +113,7 @@ async def test_real_time_runs_at_the_speed_factor() -> None:
     elapsed = time.monotonic() - start
     assert 0.08 <= elapsed < 1.0
     assert hw.clock.now() == pytest.approx(2.0, abs=0.15)
-    await server.aclose()
+    await server.door.aclose()
 
 
 async def test_late_joiner_enters_at_a_tick_boundary() -> None:
@@ -127,7 +127,7 @@ async def test_late_joiner_enters_at_a_tick_boundary() -> None:
     assert b.clock.now() == a.clock.now() == pytest.approx(0.2)
     await asyncio.gather(a.clock.tick(), b.clock.tick())
     assert server.world.tick == 3
-    await server.aclose()
+    await server.door.aclose()
 
 
 async def test_a_robot_waiting_on_its_team_keeps_ticking() -> None:
@@ -142,14 +142,14 @@ async def test_a_robot_waiting_on_its_team_keeps_ticking() -> None:
     async def worker() -> None:
         await busy.clock.sleep(3.0)  # 30 ticks, each needing the waiter's command too
         message.set_result("done")
-        await server.leave("busy")  # (else the waiter's last pumped tick would wait for it)
+        await server.door.leave("busy")  # (else the waiter's last pumped tick would wait for it)
 
     got, _ = await asyncio.gather(waiter(), worker())
     assert got == "done"
-    assert server.dropped == []
+    assert server.door.dropped == []
     assert busy.clock.now() == pytest.approx(3.0)
     assert waiting.clock.now() >= 3.0
-    await server.aclose()
+    await server.door.aclose()
 
 
 async def test_a_cancelled_step_does_not_fail_its_retry() -> None:
@@ -157,15 +157,15 @@ async def test_a_cancelled_step_does_not_fail_its_retry() -> None:
     tick: the world cancels the first call, and the retry still gets its readings."""
     server = WorldServer(World(random_obstacles((6.0, 6.0), 0)), expect=2)
     await asyncio.gather(in_process(server, "a"), in_process(server, "b"))
-    given_up = asyncio.ensure_future(server.step("a", 0, {"v": 0.1, "w": 0.0}))
+    given_up = asyncio.ensure_future(server.door.step("a", 0, {"v": 0.1, "w": 0.0}))
     await asyncio.sleep(0)
-    retry = asyncio.ensure_future(server.step("a", 0, {"v": 0.1, "w": 0.0}))
+    retry = asyncio.ensure_future(server.door.step("a", 0, {"v": 0.1, "w": 0.0}))
     await asyncio.sleep(0)
     given_up.cancel()  # as the world's RPC server does on the caller's cancel message
     await asyncio.sleep(0)
-    late = asyncio.ensure_future(server.step("a", 0, {"v": 0.1, "w": 0.0}))  # after the cancel
-    await server.step("b", 0, {"v": 0.0, "w": 0.0})
+    late = asyncio.ensure_future(server.door.step("a", 0, {"v": 0.1, "w": 0.0}))  # after the cancel
+    await server.door.step("b", 0, {"v": 0.0, "w": 0.0})
     readings = await asyncio.wait_for(asyncio.gather(retry, late), 2.0)
     assert [r["tick"] for r in readings] == [1, 1]
     assert given_up.cancelled()
-    await server.aclose()
+    await server.door.aclose()

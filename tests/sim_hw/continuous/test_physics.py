@@ -60,7 +60,7 @@ async def test_push_sense_tells_movable_from_not(
     result = await hws["r"].push.push(force=50.0, duration=2.0)
     assert result.object_id == thing.id
     assert result.moved is moved
-    await server.aclose()
+    await server.door.aclose()
 
 
 async def test_push_with_nothing_ahead_reports_nothing() -> None:
@@ -70,7 +70,7 @@ async def test_push_with_nothing_ahead_reports_nothing() -> None:
     result = await hws["r"].push.push(force=50.0, duration=0.5)
     assert result.object_id is None
     assert not result.moved
-    await server.aclose()
+    await server.door.aclose()
 
 
 def test_pusher_and_steerer_turn_the_box_together() -> None:

@@ -27,16 +27,15 @@ async def _record(path: Path) -> World:
     world = World(load_world(WORLDS / "search_and_rescue.toml"), seed=2)
     recorder = Recorder(path, world)
     snapshots: list[dict[str, Any]] = []
-    server = WorldServer(
-        world, expect=2, on_tick=recorder, snapshot_every=5, on_snapshot=snapshots.append
-    )
+    server = WorldServer(world, expect=2, snapshot_every=5, on_snapshot=snapshots.append)
+    server.door.on_tick.append(recorder)
 
     async def robot(rid: str, seed: int) -> None:
         hw = await in_process(server, rid)
         await random_walk(hw, np.random.default_rng(seed), 50)
 
     await asyncio.gather(robot("ernst", 1), robot("moseley", 2))
-    await server.aclose()
+    await server.door.aclose()
     recorder.close()
     assert [s["tick"] for s in snapshots] == list(range(5, 51, 5))
     assert set(snapshots[0]["robots"]) == {"ernst", "moseley"}

@@ -26,14 +26,15 @@ async def _search_and_rescue(path: Path, ticks: int = 60) -> None:
     """A short in-process run on the search-and-rescue world, recorded."""
     world = World(load_world(WORLDS / "search_and_rescue.toml"), seed=3)
     recorder = Recorder(path, world)
-    server = WorldServer(world, expect=2, on_tick=recorder)
+    server = WorldServer(world, expect=2)
+    server.door.on_tick.append(recorder)
 
     async def robot(rid: str, seed: int) -> None:
         hw = await in_process(server, rid)
         await random_walk(hw, np.random.default_rng(seed), ticks)
 
     await asyncio.gather(robot("ernst", 1), robot("moseley", 2))
-    await server.aclose()
+    await server.door.aclose()
     recorder.close()
 
 

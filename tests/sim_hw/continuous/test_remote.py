@@ -126,7 +126,7 @@ async def _in_process(
         return await random_walk(hw, np.random.default_rng(rng_seed), ticks)
 
     tracks = await asyncio.gather(*(walk(r, s) for r, s in walkers.items()))
-    await server.aclose()
+    await server.door.aclose()
     return dict(zip(walkers, tracks, strict=True))
 
 

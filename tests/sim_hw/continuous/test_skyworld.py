@@ -122,7 +122,7 @@ async def test_each_kind_joins_as_itself_and_a_wrong_kind_is_refused() -> None:
         assert foot.omni.max_range == 2.5 and foot.sonar.max_range == 0.3
         assert "e1" not in server.world.robots  # an eye-bot is no body of the physics
     finally:
-        await server.aclose()
+        await server.door.aclose()
 
 
 async def test_an_instruction_is_heard_after_the_tick_by_the_foot_bots_under_that_eye_bot() -> None:
@@ -155,7 +155,7 @@ async def test_an_instruction_is_heard_after_the_tick_by_the_foot_bots_under_tha
         (spot3,) = e2.camera.below()
         assert spot3.front is None  # f3 shows no front LED
     finally:
-        await server.aclose()
+        await server.door.aclose()
 
 
 async def _run(seed: int, duration: float = 40.0) -> tuple[list[Any], list[Any]]:
@@ -185,7 +185,7 @@ async def _run(seed: int, duration: float = 40.0) -> tuple[list[Any], list[Any]]
     )
     done = [*eyes_done, *feet_done]
     poses = [server.world.pose(f) for f in feet]
-    await server.aclose()
+    await server.door.aclose()
     return list(done), poses
 
 

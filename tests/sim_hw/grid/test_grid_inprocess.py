@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+from collections.abc import Awaitable, Callable
 from pathlib import Path
 from typing import Any
 
@@ -11,10 +12,11 @@ import numpy as np
 import pytest
 
 from experiments.maze import run_trial
-from mover import Message
-from programs.explore_maze import explore_maze
+from mover import Message, RunTeam
+from programs.explore_maze import MazeTeam, explore_maze
 from programs.foraging import foraging
-from robots.grid_hal import FREE, OBSTACLE, OCCUPIED
+from robots import Robot
+from robots.grid_hal import FREE, OBSTACLE, OCCUPIED, GridHardware
 from sim_hw.grid import (
     Grid,
     GridServer,
@@ -37,33 +39,33 @@ def corridor_server(**kw: Any) -> GridServer:
 async def test_a_round_waits_for_every_robot_and_applies_actions_in_name_order() -> None:
     server = corridor_server(exclusive=True, expect=2)
     a, _b = await asyncio.gather(
-        server.join("a", {"start": [1, 1]}), server.join("b", {"start": [1, 3]})
+        server.door.join("a", {"start": [1, 1]}), server.door.join("b", {"start": [1, 3]})
     )
     assert a["readings"]["round"] == 0 and a["readings"]["hears"] == ["b"]
     assert [n[1] for n in a["readings"]["around"]] == [OBSTACLE, FREE, OBSTACLE, OBSTACLE]
-    step_a = asyncio.ensure_future(server.step("a", 0, {"move": EAST, "value": 7}))
+    step_a = asyncio.ensure_future(server.door.step("a", 0, {"move": EAST, "value": 7}))
     await asyncio.sleep(0)
     assert not step_a.done() and server.round == 0
-    ra, rb = await asyncio.gather(step_a, server.step("b", 0, {"move": WEST}))
+    ra, rb = await asyncio.gather(step_a, server.door.step("b", 0, {"move": WEST}))
     # a moved first into the middle cell; b's move into it then failed
     assert ra["moved"] and not rb["moved"] and server.round == 1
     assert server.world.marks[server.grid.index((1, 1))] == 7
     assert ra["around"][EAST][1] == OCCUPIED
-    again = await server.step("a", 0, {"move": EAST})  # a retry of a done round
+    again = await server.door.step("a", 0, {"move": EAST})  # a retry of a done round
     assert again is ra
 
 
 @pytest.mark.parametrize("turns", ["together", "sequential"])
 async def test_a_cancelled_step_does_not_fail_its_retry(turns: str) -> None:
     server = corridor_server(expect=2, turns=turns)
-    await asyncio.gather(server.join("a", {}), server.join("b", {}))
-    given_up = asyncio.ensure_future(server.step("a", 0, {}))
+    await asyncio.gather(server.door.join("a", {}), server.door.join("b", {}))
+    given_up = asyncio.ensure_future(server.door.step("a", 0, {}))
     await asyncio.sleep(0)
-    retry = asyncio.ensure_future(server.step("a", 0, {}))
+    retry = asyncio.ensure_future(server.door.step("a", 0, {}))
     await asyncio.sleep(0)
     given_up.cancel()  # the caller gave the first call up; its retry must not lose the round
     await asyncio.sleep(0)
-    await server.step("b", 0, {})
+    await server.door.step("b", 0, {})
     assert (await asyncio.wait_for(retry, 2))["round"] == 1
     assert given_up.cancelled()
 
@@ -72,13 +74,13 @@ async def test_a_silent_robot_is_dropped_after_the_timeout(
     caplog: pytest.LogCaptureFixture,
 ) -> None:
     server = corridor_server(expect=2, timeout=0.05)
-    await asyncio.gather(server.join("a", {}), server.join("b", {}))
+    await asyncio.gather(server.door.join("a", {}), server.door.join("b", {}))
     with caplog.at_level(logging.WARNING, logger="sim_hw.grid._server"):
-        reply = await asyncio.wait_for(server.step("a", 0, {}), 2)
-    assert reply["round"] == 1 and server.dropped == ["b"]
+        reply = await asyncio.wait_for(server.door.step("a", 0, {}), 2)
+    assert reply["round"] == 1 and server.door.dropped == ["b"]
     assert "robot b sent no action for round 0" in caplog.text
     with pytest.raises(RobotDropped):
-        await server.step("b", 0, {})
+        await server.door.step("b", 0, {})
 
 
 class _Bus:
@@ -91,67 +93,85 @@ class _Bus:
         self.members = sorted(names)
 
 
+class _Inbox:
+    def __init__(self, queue: asyncio.Queue[Message]) -> None:
+        self.queue = queue
+
+    async def get(self, timeout: float | None = None) -> Message:
+        return await asyncio.wait_for(self.queue.get(), timeout)
+
+    async def __aenter__(self) -> _Inbox:
+        return self
+
+    async def __aexit__(self, *exc: object) -> None:
+        pass
+
+
 class _Node:
+    """A :class:`MazeNode` on the bus: everyone hears all (the world says who is in range)."""
+
     def __init__(self, bus: _Bus, name: str) -> None:
         self.bus, self.name, self.membership = bus, name, set(bus.members)
 
-    def subscribe(self, topic: str) -> Any:
-        queue = self.bus.queues[self.name]
+    def subscribe(self, topic: str) -> _Inbox:
+        return _Inbox(self.bus.queues[self.name])
 
-        class Sub:
-            async def get(self, timeout: float | None = None) -> Message:
-                return await asyncio.wait_for(queue.get(), timeout)
-
-            async def __aenter__(self) -> Any:
-                return self
-
-            async def __aexit__(self, *exc: object) -> None:
-                pass
-
-        return Sub()
-
-    async def broadcast(self, topic: str, data: Any, **kw: Any) -> None:
+    async def broadcast(
+        self, topic: str, data: Any, *, range: float | None = None, reliable: bool = False
+    ) -> None:
         for name, queue in self.bus.queues.items():
             if name != self.name:
                 queue.put_nowait(Message(self.name, topic, data, None, None, 0.0))
 
 
 class _Team:
-    def __init__(self, bus: _Bus, me: str) -> None:
-        self.bus, self.me, self.members, self.run = bus, me, bus.members, "test"
+    """A :class:`MazeTeam` on the bus: its ``and`` step waits for every member's value."""
 
-    async def distributed_and(self, op: Any) -> dict[str, Any]:
-        self.bus.values[self.me] = await op()
+    def __init__(self, bus: _Bus, me: str) -> None:
+        self.bus, self.me, self.members, self.run, self.seed = bus, me, bus.members, "test", 0
+        self.node = _Node(bus, me)
+
+    async def distributed_and(self, operation: Callable[[], Awaitable[Any]]) -> dict[str, Any]:
+        self.bus.values[self.me] = await operation()
         if len(self.bus.values) == len(self.members):
             self.bus.all_in.set()
         await self.bus.all_in.wait()
         return dict(self.bus.values)
 
 
-class _Robot:
-    def __init__(self, name: str, hw: Any, node: _Node) -> None:
-        self.id, self.hw, self.node, self.log = name, hw, node, logging.getLogger(name)
+def _a_run_team_is_a_maze_team(team: RunTeam) -> MazeTeam:
+    """What the programs ask of a team, a real one has (mypy checks this)."""
+    return team
+
+
+Program = Callable[..., Awaitable[dict[str, Any]]]
+"""A grid program: ``program(robot, team, **args)``."""
 
 
 async def _run_team(
-    server: GridServer, names: list[str], specs: list[dict[str, Any]], program: Any, **args: Any
+    server: GridServer,
+    names: list[str],
+    specs: list[dict[str, Any]],
+    program: Program,
+    **args: Any,
 ) -> list[dict[str, Any]]:
     hws = await asyncio.gather(
         *(in_process(server, n, s) for n, s in zip(names, specs, strict=True))
     )
 
-    async def idle(hw: Any) -> None:
+    async def idle(hw: GridHardware) -> None:
         while True:
             await hw.clock.tick()
 
     idles = [asyncio.ensure_future(idle(hw)) for hw in hws]
     bus = _Bus(names)
+    teams: list[MazeTeam] = [_Team(bus, n) for n in names]  # what the programs ask of a team
     try:
         return list(
             await asyncio.gather(
                 *(
-                    program(_Robot(n, hw, _Node(bus, n)), _Team(bus, n), **args)
-                    for n, hw in zip(names, hws, strict=True)
+                    program(Robot(n, hw), team, **args)
+                    for n, hw, team in zip(names, hws, teams, strict=True)
                 )
             )
         )

@@ -61,7 +61,7 @@ async def grid_team(nodes: list[Node]) -> AsyncIterator[tuple[list[RunTeam], lis
     finally:
         for clock in clocks:
             await clock.aclose()
-        await server.aclose()
+        await server.door.aclose()
 
 
 async def test_a_grid_team_decides_its_or_in_rounds_and_goes_on(

@@ -24,7 +24,7 @@ class _Node:
 def test_the_pymunk_world_answers_its_recording_header() -> None:
     world = World(load_world(WORLDS / "search_and_rescue.toml"), seed=1)
     node = _Node()
-    export_scene(node, WorldServer(world))
+    export_scene(node, WorldServer(world).door)
     assert set(node.exported) == {SCENE}
     scene = node.exported[SCENE]()
     assert scene["kind"] == "continuous"
@@ -38,7 +38,7 @@ def test_a_grid_world_answers_its_cells_and_its_state(tmp_path: Path) -> None:
     grid.write_text("#####\n#B.R#\n#...#\n#####\n")
     server = build_server(str(grid), {})
     node = _Node()
-    export_scene(node, server)
+    export_scene(node, server.door)
     assert set(node.exported) == {SCENE, FRAME}
     scene = node.exported[SCENE]()
     assert scene["kind"] == "grid" and scene["shape"] == [4, 5]
