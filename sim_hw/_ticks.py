@@ -76,19 +76,20 @@ class Ticks:
         """The time of the current readings."""
         return self._time_of(self.readings)
 
-    async def tick(self, make: Callable[[], Command], *, unless_idle: bool = False) -> bool:
-        """One exchange (shared with concurrent callers; see the class); True once done.
+    @property
+    def held(self) -> bool:
+        """Whether a tick would wait for a hold to be lifted now (see :meth:`hold`)."""
+        return self._hold is not None and self.now() > self._hold and self._taken_all()
 
-        Inside ``idling()`` there are no ticks: RuntimeError, or with ``unless_idle`` (a
-        background pump that pauses while a team step idles the robot) False at once."""
+    async def tick(self, make: Callable[[], Command]) -> None:
+        """One exchange (shared with concurrent callers; see the class); RuntimeError inside
+        ``idling()``."""
         while True:
             if self._idle:
-                if unless_idle:
-                    return False
                 raise RuntimeError(
                     f"robot {self.robot!r} is idle (inside clock.idling()): no ticks"
                 )
-            if not (self._hold is not None and self.now() > self._hold and self._taken_all()):
+            if not self.held:
                 break
             await self._wait_change()  # held (see hold): until released
         task = self._task
@@ -99,7 +100,6 @@ class Ticks:
             task.add_done_callback(failure)
         await asyncio.shield(task)
         self._take(task)
-        return True
 
     async def changed(self) -> None:
         """Return at the next change: readings taken, a command handed in, a hold, idling

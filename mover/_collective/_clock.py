@@ -39,6 +39,14 @@ class RunClock(IdleClock, Protocol):
         ...
 
 
+def hold_here(clock: RunClock) -> None:
+    """Hold ``clock`` where it is: nothing more is handed in on its current readings (nor
+    later ones) until ``clock.hold(None)``. A member whose operation in a step ended is held so
+    until the step is over, so that where it stops is fixed in simulated time even if the
+    program keeps a background ``ticking()``."""
+    clock.hold(math.nextafter(clock.now(), -math.inf))
+
+
 class TimedOp:
     """This member's operation in an OR step decided in simulated time, for the designated
     member's ``or_passed``; it runs as a task of its step (``spawn``), and settles
@@ -54,9 +62,7 @@ class TimedOp:
     async def _run(self, operation: Callable[[], Awaitable[Any]]) -> Any:
         result = await operation()
         self.finished_at = self.clock.now()  # as it returns: no loop turn in between
-        # Nothing more on these readings until the step is over (a background ticking() of
-        # the program's must not hand in this tick while the decision travels).
-        self.clock.hold(math.nextafter(self.finished_at, -math.inf))
+        hold_here(self.clock)  # while the decision travels
         return result
 
     async def passed(self, t: float) -> dict[str, Any]:

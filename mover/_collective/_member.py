@@ -18,7 +18,7 @@ from collections.abc import Awaitable, Callable, Sequence
 from typing import TYPE_CHECKING, Any
 
 from .._exceptions import MemberLost, NotDelivered
-from ._clock import RunClock, TimedOp
+from ._clock import RunClock, TimedOp, hold_here
 from ._designated import AND_DONE, AND_JOIN, AND_PUT, OR_CLAIM, OR_JOIN, Collectives
 from ._group import Settled, StepTasks
 from ._reach import Retry, wait_lost, wait_reachable
@@ -287,40 +287,54 @@ class TaskTeam:
             self.collectives.serve(self.run, metrics.step, self.members, "and_all")
         told = self.collectives.decision(self.run, metrics.step)
         error: BaseException | None = None
-        async with StepTasks() as tasks:
-            op = tasks.start(operation())
-            if designated and self.collectives.policy_of(self.run) == "fail":
-                tasks.start(self._told_of_loss(metrics))  # sets ``told`` if a member is lost
-            waiting: set[asyncio.Future[Any]] = {op, told}
-            await asyncio.wait(waiting, return_when=asyncio.FIRST_COMPLETED)
-            tasks.cancel()  # the operation, if the step was decided meanwhile (a loss)
-        if told.done():  # decided while this member was in its operation: it was lost
-            metrics.finished = time.perf_counter()
-            decision = told.result()
-        else:
-            ended = op.result()
-            metrics.finished = time.perf_counter()
-            error = ended.error
-            if error is None:
-                wire = ended.value
+        try:
+            async with StepTasks() as tasks:
+                op = tasks.start(self._held(operation) if timed else operation())
+                if designated and self.collectives.policy_of(self.run) == "fail":
+                    tasks.start(self._told_of_loss(metrics))  # sets ``told`` on a loss
+                waiting: set[asyncio.Future[Any]] = {op, told}
+                await asyncio.wait(waiting, return_when=asyncio.FIRST_COMPLETED)
+                tasks.cancel()  # the operation, if the step was decided meanwhile (a loss)
+            if told.done():  # decided while this member was in its operation: it was lost
+                metrics.finished = time.perf_counter()
+                decision = told.result()
             else:
-                wire = OperationFailed(type(error).__name__, str(error)).to_wire()
-            # In simulated time a member that finished is idle while it waits, so that the
-            # world neither waits for it nor moves on because of it: when the last one
-            # finishes, the world holds still until all have been told.
-            async with self.clock.idling() if timed and self.clock else contextlib.nullcontext():
-                if designated:
-                    decision = await self._and_designated(metrics, wire)
+                ended = op.result()
+                metrics.finished = time.perf_counter()
+                error = ended.error
+                if error is None:
+                    wire = ended.value
                 else:
-                    decision = await self._and_all(metrics, wire)
-        metrics.continued = time.perf_counter()
-        self._raise_lost(metrics, decision)
-        if timed:
-            await self._rejoin()
+                    wire = OperationFailed(type(error).__name__, str(error)).to_wire()
+                # In simulated time a member that finished is idle while it waits, so that
+                # the world neither waits for it nor moves on because of it: when the last
+                # one finishes, the world holds still until all have been told.
+                idle = self.clock.idling() if timed and self.clock else contextlib.nullcontext()
+                async with idle:
+                    if designated:
+                        decision = await self._and_designated(metrics, wire)
+                    else:
+                        decision = await self._and_all(metrics, wire)
+            metrics.continued = time.perf_counter()
+            self._raise_lost(metrics, decision)
+            if timed:
+                await self._rejoin()
+        finally:
+            if timed and self.clock is not None:
+                self.clock.hold(None)  # held since its operation ended (see _held)
         if error is not None:
             raise error
         results = {m: unwire(r) for m, r in decision.results.items()}
         return await continuation(results) if continuation else results
+
+    async def _held(self, operation: Callable[[], Awaitable[Any]]) -> Any:
+        """``operation``, then this member's clock held where it ended, with no loop turn in
+        between (:func:`hold_here`)."""
+        try:
+            return await operation()
+        finally:
+            assert self.clock is not None
+            hold_here(self.clock)
 
     async def _told_of_loss(self, metrics: StepMetrics) -> None:
         """While this member is in its operation of AND step ``metrics.step``: once a member

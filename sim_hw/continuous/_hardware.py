@@ -124,9 +124,10 @@ class SimHardware:
     async def ticking(self) -> AsyncIterator[None]:
         """Tick in the background for the duration of the block (nested blocks are fine).
 
-        While the robot is idle (a team step in simulated time idles it as it waits for the
-        others) the background ticks pause, and go on once it is not: the earlier advice to
-        keep the clock ticking around team steps still runs, though steps no longer need it
+        While the robot is idle or held (a team step in simulated time idles a member as it
+        waits for the others, and holds it from where its operation ended until the step is
+        over) the background ticks pause: the earlier advice to keep the clock ticking around
+        team steps still runs, and runs alike every time, though steps no longer need it
         (said once in the log). On the way out the exchange under way is finished, not
         cancelled, so the world never sees half a tick.
         """
@@ -144,17 +145,19 @@ class SimHardware:
 
     async def _run_pump(self) -> None:
         while self._pumps > 0:
-            if await self._ticks.tick(self._command, unless_idle=True):
+            ticks = self._ticks
+            if not (ticks.idle or ticks.held):  # (no await between this and the tick)
+                await ticks.tick(self._command)
                 await asyncio.sleep(0)  # let the block's own tasks run between ticks
                 continue
-            if not self._paused_said:
+            if ticks.idle and not self._paused_said:
                 self._paused_said = True
                 log.warning(
                     "robot %s: clock.ticking() pauses while a team step idles the robot; "
                     "team steps need no ticking() around them any more",
                     self.id,
                 )
-            await self._ticks.changed()
+            await ticks.changed()  # paused while a team step idles or holds the robot
 
     # -- drive, LED, floor ----------------------------------------------------------------------
 

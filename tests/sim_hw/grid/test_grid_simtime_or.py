@@ -45,7 +45,9 @@ def _walk(hw: GridHardware, until: int, wall_after: float = 0.0) -> Callable[[],
 async def grid_team(nodes: list[Node]) -> AsyncIterator[tuple[list[RunTeam], list[GridHardware]]]:
     """The three robots in a 5x5 grid world in this process, each a member of one run whose
     clock is the robot process's ``HostClock`` over its grid clock; no hardware lost at the end."""
-    server = GridServer(GridWorld(Grid(np.zeros((5, 5), dtype=bool)), (2, 2)), expect=3)
+    # timeout: in-process robots are silent for long only on a loaded machine (no drops then)
+    world = GridWorld(Grid(np.zeros((5, 5), dtype=bool)), (2, 2))
+    server = GridServer(world, expect=3, timeout=60)
     hws = await asyncio.gather(
         *(in_process(server, n, {"start": [0, i]}) for i, n in enumerate(NAMES))
     )
