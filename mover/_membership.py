@@ -206,7 +206,11 @@ class Membership:
 
     def _ask_hello(self, name: str, attempt: int = 0) -> None:
         """Verify the holder of ``name``'s token; it joins once its hello answers."""
-        if not self._state.is_open or name not in self._tokens or name in self._members:
+        if not self._state.is_open:
+            self._retrying.clear()
+            self._waiting.clear()
+            return
+        if name not in self._tokens or name in self._members:
             self._retried(name)
             return
         self._hello(name, attempt=attempt, join=True)
