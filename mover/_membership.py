@@ -192,6 +192,8 @@ class Membership:
         key = str(sample.key_expr)
         name = _keys.robot_of(key)
         if sample.kind == zenoh.SampleKind.DELETE:
+            if name == self._state.name and self._state.is_open and not self._state.observer:
+                return  # a stranger's token of our name went: ours stays while we are open
             self._tokens.discard(name)
             self._waiting.pop(name, None)
             self._leave(name)

@@ -1,10 +1,11 @@
 """An outsider with no team key that declares many fake liveliness tokens under a team's prefix.
 
-``python -m tests.helpers.token_flood TEAM --tokens N --seconds S [--answer]``: one raw zenoh
-session (peer mode, the cluster's endpoints from the environment) declares N tokens
-``mover/TEAM/alive/fake-<i>``, prints ``READY`` once declared, holds them S seconds, then
-undeclares them and prints ``DONE``. With ``--answer`` it also answers every hello question on
-the team's prefix with junk (so that each fake token also earns a refused hello).
+``python -m tests.helpers.token_flood TEAM --tokens N --seconds S [--answer] [--also NAME]``:
+one raw zenoh session (peer mode, the cluster's endpoints from the environment) declares N
+tokens ``mover/TEAM/alive/fake-<i>`` (and one of each ``--also`` name: a member's own), prints
+``READY`` once declared, holds them S seconds, then undeclares them and prints ``DONE``. With
+``--answer`` it also answers every hello question on the team's prefix with junk (so that each
+fake token also earns a refused hello).
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ def main() -> None:
     p.add_argument("--tokens", type=int, default=2000)
     p.add_argument("--seconds", type=float, default=5.0)
     p.add_argument("--answer", action="store_true")
+    p.add_argument("--also", action="append", default=[], metavar="NAME")
     args = p.parse_args()
 
     def on_query(query: Any) -> None:
@@ -34,10 +36,8 @@ def main() -> None:
     answering = (
         session.declare_queryable(f"mover/{args.team}/hello/**", on_query) if args.answer else None
     )
-    tokens = [
-        session.liveliness().declare_token(f"mover/{args.team}/alive/fake-{i}")
-        for i in range(args.tokens)
-    ]
+    names = [f"fake-{i}" for i in range(args.tokens)] + args.also
+    tokens = [session.liveliness().declare_token(f"mover/{args.team}/alive/{n}") for n in names]
     print("READY", flush=True)
     time.sleep(args.seconds)
     for token in tokens:

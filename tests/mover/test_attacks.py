@@ -171,8 +171,10 @@ async def test_2000_fake_tokens_write_a_few_log_lines_and_fail_no_call(
 ) -> None:
     """An outsider's raw zenoh session declares 2000 liveliness tokens under the team's prefix
     (and, ``answering``, answers every hello with junk): each member logs a few lines, not one
-    per token, and the team's calls all go through meanwhile. The members give a token up after
-    one retry (MOVER_HELLO_RETRIES=1) so that all 2000 are given up within the test."""
+    per token, and the team's calls all go through meanwhile. Its tokens include one of each
+    member's name, whose going must make no one leave (the member itself included). The
+    members give a token up after one retry (MOVER_HELLO_RETRIES=1) so that all 2000 are given
+    up within the test."""
     members = ("m1", "m2")
     async with cluster() as c, Node("tester", c.team, kind="test", config=c.seed) as node:
         c.env["MOVER_HELLO_RETRIES"] = "1"
@@ -183,6 +185,7 @@ async def test_2000_fake_tokens_write_a_few_log_lines_and_fail_no_call(
         before = {m: len(logs[m].read_text().splitlines()) for m in members}
         flood = await c.start(
             "tests.helpers.token_flood", c.team.name, "--tokens", "2000", "--seconds", "6",
+            "--also", "m1", "--also", "m2",
             *(["--answer"] if answer else []),
         )  # fmt: skip
         calls = 0
@@ -199,4 +202,5 @@ async def test_2000_fake_tokens_write_a_few_log_lines_and_fail_no_call(
         print(f"\n{calls} pairs of calls; lines per member:", {m: len(v) for m, v in lines.items()})
         for m in members:
             assert 1 <= len(lines[m]) <= 20, lines[m]  # the flood was seen, and said in few lines
+            assert not [line for line in lines[m] if " left" in line], lines[m]  # none left
         assert calls >= 50  # the calls went on all along
