@@ -1,5 +1,6 @@
 """What the experiment runners share: the progress line, mean ± sd / se, comma lists, and
-their ``--runs``, ``--seed`` and ``--workers``.
+their ``--runs``, ``--seed`` and ``--workers`` (and the check that their output folders can be
+written, made with those, before any run: a bad ``--out`` used to be found after the runs).
 
 One copy each (the runners had written their own). The progress line goes to stderr, so
 that stdout holds only the report, the same for the same seeds.
@@ -11,9 +12,11 @@ import argparse
 import math
 import secrets
 import sys
+import tempfile
 import time
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import TypeVar
 
 import numpy as np
@@ -199,12 +202,35 @@ class RunArguments:
 
 def read_run_arguments(args: argparse.Namespace) -> RunArguments:
     """The checked ``--runs``, ``--seed`` and ``--workers`` of ``args`` (a seed drawn at random
-    when none was given); raises :class:`~mover.cli.UsageError` naming what is wrong."""
+    when none was given), and the output folders the runner will write (``--out`` unless
+    ``--no-plots``, ``--save`` unless ``--no-save``) checked by :func:`writable_dir`; raises
+    :class:`~mover.cli.UsageError` naming what is wrong."""
     runs = None if args.runs is None else _checked("--runs", args.runs, 1, MAX_RUNS)
     seed = secrets.randbits(32) if args.seed is None else _checked("--seed", args.seed, 0, MAX_SEED)
     workers = getattr(args, "workers", None)
     workers = 1 if workers is None else _checked("--workers", workers, 1, MAX_WORKERS)
+    for option, skip in (("out", "no_plots"), ("save", "no_save")):
+        if getattr(args, option, None) is not None and not getattr(args, skip, False):
+            writable_dir(Path(getattr(args, option)), f"--{option}")
     return RunArguments(runs, seed, workers)
+
+
+def writable_dir(path: Path, option: str) -> Path:
+    """``path`` if it is a directory this process can write in, or can be made one (it need
+    not exist yet: nothing is made); else :class:`~mover.cli.UsageError` naming ``option``.
+    Checked by writing a file in the nearest folder that exists (root may write where
+    ``os.access`` says no one can, and no one can write in /proc)."""
+    probe = path
+    while not probe.exists() and probe.parent != probe:
+        probe = probe.parent
+    if not probe.is_dir():
+        raise UsageError(f"{option} {path}: {probe} is not a directory")
+    try:
+        with tempfile.NamedTemporaryFile(dir=probe, prefix=".mover-probe-"):
+            pass
+    except OSError as exc:
+        raise UsageError(f"{option} {path}: cannot write in {probe}: {exc.strerror}") from None
+    return path
 
 
 def _checked(option: str, value: int, low: int, high: int) -> int:

@@ -18,6 +18,7 @@ import math
 import sys
 import time
 from dataclasses import dataclass, field, replace
+from importlib.metadata import entry_points
 from pathlib import Path
 from typing import Any
 
@@ -33,6 +34,8 @@ from mover._up import (
 )
 from mover.cli import UsageError, json_object, positive
 from sim_hw import STATE_TOPIC, WorldFileError, load_world
+
+from ._common import writable_dir
 
 ROOT = Path(__file__).resolve().parents[1]
 TEAM_FILE = ROOT / "teams" / "search_and_rescue.toml"
@@ -88,6 +91,12 @@ def settings(args: argparse.Namespace) -> DemoSettings:
     if not 0 <= args.seed < 2**63:
         raise UsageError(f"--seed must be from 0 to 2**63-1, got {args.seed}")
     program_args = json_object(args.args, "--args")
+    installed = sorted(ep.name for ep in entry_points(group="mover.programs"))
+    if args.program not in installed:  # the members run what is installed here
+        raise UsageError(
+            f"--program {args.program!r} is not installed (installed: {', '.join(installed)})"
+        )
+    out = writable_dir(Path(args.out), "--out")
     goals = [m.center for m in spec.markers if m.kind == "target"]
     return DemoSettings(
         program=args.program,
@@ -95,7 +104,7 @@ def settings(args: argparse.Namespace) -> DemoSettings:
         robots=tuple(spec.robots),
         program_args=program_args,
         goal=(float(goals[0][0]), float(goals[0][1])) if goals else None,
-        out=Path(args.out),
+        out=out,
         seed=args.seed,
         timeout=args.timeout,
     )

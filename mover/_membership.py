@@ -6,6 +6,13 @@ hello sealed under the team key and carrying a fresh challenge; only then is it 
 the hello tells the asker the member's session (see ``_wire.Sessions``). A token
 that goes away (the process exited, was SIGKILLed — seen within milliseconds — or hung past its
 one-second lease) makes the member leave.
+
+What a stranger's token costs is bounded: one question when it appears, and at most
+``hello_retries`` more, backing off from 0.2 s to 3 s; at most :data:`MAX_RETRYING` names are
+being asked again at once (the rest wait their turn, after the first question, which is never
+held back: a member that joins during a flood answers it at once). A token that never proves
+itself is counted in the rate-limited log (:mod:`mover._ratelog`): one line per interval for
+all of them, whatever their number, as for junk answers to a hello.
 """
 
 from __future__ import annotations
@@ -23,11 +30,15 @@ import zenoh
 
 from . import _keys
 from ._exceptions import WireError
+from ._ratelog import RateLog
 
 if TYPE_CHECKING:
     from ._session import SessionState
 
 log = logging.getLogger("mover.team")
+
+MAX_RETRYING = 64
+"""Names whose hello is asked again at once, at most (each unanswered token waits its turn)."""
 
 
 @dataclass(frozen=True)
@@ -67,6 +78,10 @@ class Membership:
         self._changed = asyncio.Event()
         self._verifying: dict[str, list[asyncio.Future[bytes | None]]] = {}
         self._asked: dict[str, float] = {}  # name -> when a hello was last asked unprompted
+        self._retrying: set[str] = set()  # tokens whose hello is being asked again
+        self._waiting: dict[str, int] = {}  # tokens waiting their turn -> the attempt they are at
+        self.faults = RateLog(state.name, log)
+        """The rate-limited log of what strangers did (fake tokens, junk hellos), with counts."""
 
     # -- the public view ------------------------------------------------------------------------
 
@@ -177,7 +192,10 @@ class Membership:
         key = str(sample.key_expr)
         name = _keys.robot_of(key)
         if sample.kind == zenoh.SampleKind.DELETE:
+            if name == self._state.name and self._state.is_open and not self._state.observer:
+                return  # a stranger's token of our name went: ours stays while we are open
             self._tokens.discard(name)
+            self._waiting.pop(name, None)
             self._leave(name)
             return
         self._tokens.add(name)
@@ -185,13 +203,35 @@ class Membership:
             if not self._state.observer:
                 self._join(self.self_info())
             return
-        self._ask_hello(name)
+        if name not in self._retrying and name not in self._waiting:  # else it is being asked
+            self._ask_hello(name)
 
     def _ask_hello(self, name: str, attempt: int = 0) -> None:
         """Verify the holder of ``name``'s token; it joins once its hello answers."""
-        if not self._state.is_open or name not in self._tokens or name in self._members:
+        if not self._state.is_open:
+            self._retrying.clear()
+            self._waiting.clear()
+            return
+        if name not in self._tokens or name in self._members:
+            self._retried(name)
             return
         self._hello(name, attempt=attempt, join=True)
+
+    def _retry(self, name: str, attempt: int) -> None:
+        """Ask ``name`` again (``attempt``), later, or once its turn comes (see the module)."""
+        if name not in self._retrying and len(self._retrying) >= MAX_RETRYING:
+            self._waiting[name] = attempt
+            return
+        self._retrying.add(name)
+        delay = min(0.2 * 2 ** (attempt - 1), 3.0)
+        asyncio.get_running_loop().call_later(delay, self._ask_hello, name, attempt)
+
+    def _retried(self, name: str) -> None:
+        """``name`` is asked no more (it answered, left or gave up): the next one's turn."""
+        self._retrying.discard(name)
+        while self._waiting and len(self._retrying) < MAX_RETRYING:
+            turn = next(iter(self._waiting))
+            self._retry(turn, self._waiting.pop(turn))
 
     async def verify(self, name: str, timeout: float = 5.0, *, fresh: bool = False) -> bytes | None:
         """``name``'s session, verified with a fresh challenge (asked now unless known, or if
@@ -286,14 +326,16 @@ class Membership:
             try:
                 env, info = self._open_hello(reply.ok.payload.to_bytes(), name, challenge)
             except WireError as exc:
-                state.faults.warn(name, f"hello from {name!r} refused: {exc}")
+                self.faults.warn("hello", f"refused a hello from {name!r}: {exc}")
                 return
             answered = True
             # Its session, as of this fresh answer: what it broadcast before does not count.
             state.peers.learn(name, env.epoch, env.counter)
             self._verified(name, env.epoch)
-            if join and name in self._tokens:
-                self._join(info)
+            if join:
+                self._retried(name)
+                if name in self._tokens:
+                    self._join(info)
 
         def on_done(_: None) -> None:
             if answered:
@@ -301,19 +343,17 @@ class Membership:
             if not join:
                 self._verified(name, None)
                 return
-            if name not in self._tokens:
-                return
-            if attempt < state.config.hello_retries:
+            if name in self._tokens and attempt < state.config.hello_retries:
                 # No authentic answer (an overloaded machine, a link still coming up, or only
                 # a stranger's answer on the member's key): ask again later.
-                delay = min(0.2 * 2**attempt, 3.0)
-                asyncio.get_running_loop().call_later(delay, self._ask_hello, name, attempt + 1)
-            else:
-                log.warning(
-                    "%s: %r holds a liveliness token but is not a verified member of team %r",
-                    state.name,
-                    name,
-                    state.team,
+                self._retry(name, attempt + 1)
+                return
+            self._retried(name)
+            if name in self._tokens:
+                self.faults.warn(
+                    "tokens",
+                    f"{name!r} holds a liveliness token but is not a verified member of team "
+                    f"{state.team!r}",
                 )
 
         state.ask_all(

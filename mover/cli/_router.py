@@ -27,7 +27,13 @@ from pathlib import Path
 from typing import Any
 
 from .._config import NodeConfig, _read_overrides
+from .._endpoints import beyond_loopback_in_clear, check_endpoint
+from .._exceptions import ConfigError
 from .._keys import check_name
+
+DEFAULT_LISTEN = "tcp/127.0.0.1:7447"
+"""Where a router without ``--listen`` or a config listens: this machine only."""
+WIDE_LISTEN = "tcp/0.0.0.0:7447"
 
 CLOSE_BOUND = 10.0
 """Seconds a stopping router may take to close its session before it exits anyway."""
@@ -57,7 +63,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "--listen",
         action="append",
         metavar="ENDPOINT",
-        help="endpoint to listen on (default tcp/0.0.0.0:7447); repeatable",
+        help=f"endpoint to listen on (default {DEFAULT_LISTEN}: this machine only; "
+        f"{WIDE_LISTEN} for every interface); repeatable",
     )
     p.add_argument("--config", metavar="FILE", help="a JSON settings file (e.g. router.json)")
     p.add_argument("--gen-config", metavar="DIR", help="write certificates and configs to DIR")
@@ -95,18 +102,48 @@ def run(args: argparse.Namespace) -> int:
         for path in written:
             print(path)
         return 0
+    config, notes = listening(args)
+    for line in notes:
+        print(f"mover router: {line}", file=sys.stderr)
+    serve(config)
+    return 0
+
+
+def listening(args: argparse.Namespace) -> tuple[NodeConfig, list[str]]:
+    """The router's settings from ``--listen`` and ``--config`` (every endpoint checked before
+    zenoh sees it), and what to tell the user first: where a router without either listens
+    (this machine only) and one warning if other machines reach it without TLS."""
+    from . import UsageError
+
     overrides: dict[str, Any] = {}
     if args.config:
         try:
             overrides = _read_overrides(args.config)
         except ValueError as exc:
             raise UsageError(str(exc)) from None
-    listen = tuple(args.listen or ()) or (
-        () if "listen/endpoints" in overrides else ("tcp/0.0.0.0:7447",)
-    )
-    config = NodeConfig(mode="router", listen=listen, overrides=overrides)
-    serve(config)
-    return 0
+    notes = []
+    listen = tuple(check_endpoint(e, "--listen") for e in args.listen or ())
+    effective = list(listen)
+    if "listen/endpoints" in overrides:  # the file's endpoints replace --listen's
+        effective = overrides["listen/endpoints"]
+        if not isinstance(effective, list):
+            effective = []  # zenoh's per-mode form ({"router": [...]}): zenoh checks it
+        for endpoint in effective:
+            check_endpoint(endpoint, f"{args.config}: listen/endpoints")
+    elif not listen:
+        listen = (DEFAULT_LISTEN,)
+        effective = list(listen)
+        notes.append(
+            f"listening on {DEFAULT_LISTEN}, this machine only (--listen {WIDE_LISTEN} for "
+            "every interface; --gen-config for TLS and an ACL)"
+        )
+    clear = beyond_loopback_in_clear(effective)
+    if clear:
+        notes.append(
+            f"warning: {', '.join(clear)} can be reached from other machines without TLS: "
+            "anyone there can join the network (mover router --gen-config writes TLS and an ACL)"
+        )
+    return NodeConfig(mode="router", listen=listen, overrides=overrides), notes
 
 
 def serve(config: NodeConfig) -> None:
@@ -116,11 +153,13 @@ def serve(config: NodeConfig) -> None:
     stop = threading.Event()
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda *_: stop.set())
-    with zenoh.open(config.to_zenoh()) as session:
-        print(
-            f"router {session.zid()} listening on {', '.join(config.listen) or 'config'}",
-            flush=True,
-        )
+    where = ", ".join(config.listen) or "the config's endpoints"
+    try:
+        session = zenoh.open(config.to_zenoh())
+    except zenoh.ZError as exc:  # the port is taken, the address is not this machine's...
+        raise ConfigError(f"cannot listen on {where}: {exc}") from None
+    with session:
+        print(f"router {session.zid()} listening on {where}", flush=True)
         stop.wait()
         # Closing waits on zenoh's links; bounded, so that a stop never hangs (a test saw a
         # router outlive its SIGTERM for two minutes on a loaded machine, once).

@@ -73,6 +73,8 @@ MAX_SEED = 2**63 - 1
 """A generator's seed is a whole number from 0 to this."""
 MAX_COUNT = 10**9
 """The largest resource amount, floor cell index or floor value magnitude."""
+MAX_FLOOR_CELLS = 2**24
+"""The most floor cells an arena may have (8 bytes each: a 1000 m square at the default 0.25 m)."""
 
 
 class WorldFileError(FileError):
@@ -319,6 +321,12 @@ def _world(top: Table) -> WorldSpec:
             name=w.read("name", STRING, spec.name),
             cell=w.read("cell", _POSITIVE, spec.cell),
         )
+        floor_cells = (spec.size[0] / spec.cell + 1) * (spec.size[1] / spec.cell + 1)
+        if floor_cells > MAX_FLOOR_CELLS:
+            raise w.fail(
+                "cell",
+                f"{spec.cell:g} m makes {floor_cells:.3g} floor cells, over {MAX_FLOOR_CELLS}",
+            )
         w.done()
     elif gen is None:
         raise top.fail("world", "is required (a table with at least 'size')")

@@ -163,3 +163,44 @@ async def test_a_member_whose_clock_is_an_hour_off_works(
         while {"from": name} not in await _heard(node, "r1", "news"):
             await node.call(name, "send", "news", {"from": name}, None, timeout=5)
             await asyncio.sleep(0.1)
+
+
+@pytest.mark.parametrize("answer", [False, True], ids=["silent", "answering"])
+async def test_2000_fake_tokens_write_a_few_log_lines_and_fail_no_call(
+    tmp_path: Path, answer: bool
+) -> None:
+    """An outsider's raw zenoh session declares 2000 liveliness tokens under the team's prefix
+    (and, ``answering``, answers every hello with junk): each member logs a few lines, not one
+    per token, and the team's calls all go through meanwhile. Its tokens include one of each
+    member's name, whose going must make no one leave (the member itself included). The
+    members give a token up after one retry (MOVER_HELLO_RETRIES=1) so that all 2000 are given
+    up within the test."""
+    members = ("m1", "m2")
+    async with cluster() as c, Node("tester", c.team, kind="test", config=c.seed) as node:
+        c.env["MOVER_HELLO_RETRIES"] = "1"
+        logs = {m: tmp_path / f"{m}.log" for m in members}
+        for m in members:
+            await c.start("tests.helpers.robot_proc", "--name", m, log=logs[m])
+        await node.membership.wait_for(members, timeout=10)
+        before = {m: len(logs[m].read_text().splitlines()) for m in members}
+        flood = await c.start(
+            "tests.helpers.token_flood", c.team.name, "--tokens", "2000", "--seconds", "6",
+            "--also", "m1", "--also", "m2",
+            *(["--answer"] if answer else []),
+        )  # fmt: skip
+        calls = 0
+        end = time.monotonic() + 6  # the flood's time
+        while time.monotonic() < end:
+            for a, b in (("m1", "m2"), ("m2", "m1")):
+                got = await node.call(a, "call_other", b, "add", [calls, 1], timeout=5)
+                assert got == calls + 1
+            calls += 1
+            await asyncio.sleep(0.02)
+        await asyncio.wait_for(flood.wait(), 30)
+        await asyncio.sleep(0.5)
+        lines = {m: logs[m].read_text().splitlines()[before[m] :] for m in members}
+        print(f"\n{calls} pairs of calls; lines per member:", {m: len(v) for m, v in lines.items()})
+        for m in members:
+            assert 1 <= len(lines[m]) <= 20, lines[m]  # the flood was seen, and said in few lines
+            assert not [line for line in lines[m] if " left" in line], lines[m]  # none left
+        assert calls >= 50  # the calls went on all along

@@ -45,6 +45,7 @@ def _files(tmp: Path) -> dict[str, str]:
         "latin1.txt": b"..\xe9.\n....\n",
         "teamnum.toml": "robots = 5\n",
         "existing": "a file where a directory is wanted\n",
+        "finecell.toml": '[world]\nname = "f"\nsize = [10, 10]\ncell = 1e-6\n',
     }
     for name, text in files.items():
         path = tmp / name
@@ -100,7 +101,7 @@ CASES = [
     case(["world", "{count.toml}"], "generator.count: must be from 0 to 10000, got 100000000"),
     case(["world", "{rays.toml}"], "robot.sonar.rays: must be from 1 to 360, got 100000000"),
     case(["world", WORLD, "--state-rate", "-1"], "--state-rate"),
-    case(["router", "--listen", "garbage"], "bad zenoh setting"),
+    case(["router", "--listen", "garbage"], "--listen 'garbage': not an endpoint"),
     case(["demo", "--timeout", "0.5"], "no result within 0.5 s"),
     case(["demo", "--timeout", "-1"], "--timeout"),
     case(["experiment", "maze", "--size", "0"], "--size must be"),
@@ -109,6 +110,17 @@ CASES = [
         ["world", "{badid.toml}"],
         "bad name/*",
     ),
+    # the issue's last four (issue 24): found before any work starts
+    case(["world", "{finecell.toml}"], "world.cell: 1e-06 m makes 1e+14 floor cells, over"),
+    case(["router", "--listen", "tcp/127.0.0.1:99999"], "the port must be from 0 to 65535"),
+    case(["demo", "--program", "nosuch"], "--program 'nosuch' is not installed (installed: "),
+    case(["experiment", "maze", "--out", "/proc/x"], "--out /proc/x: cannot write in /proc"),
+    case(["experiment", "foraging", "--out", "{existing}/x"], "{existing} is not a directory"),
+    case(["experiment", "levy", "--save", "/proc/x"], "--save /proc/x: cannot write in /proc"),
+    case(["experiment", "eyebot", "--out", "/proc/x"], "--out /proc/x: cannot write in /proc"),
+    case(["demo", "--out", "/proc/x"], "--out /proc/x: cannot write in /proc"),
+    case(["router", "--listen", "tcp/[::1:7447"], "in brackets"),
+    case(["router", "--listen", "bogus/127.0.0.1:7447"], "unknown protocol 'bogus'"),
     # options: unknown, malformed, negative, NaN, infinite, huge
     case(["call", "r1", "add", "--bogus-option"], "unrecognized arguments: --bogus-option"),
     case(["bogusverb"], "invalid choice: 'bogusverb'"),
