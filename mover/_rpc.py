@@ -400,7 +400,7 @@ class RpcClient:
                 raise WireError("reply body is not a map")
         except WireError as exc:
             state.stats["refused.reply"] += 1
-            state.faults.warn(p.robot, f"dropped a reply from {p.robot!r}: {exc}")
+            state.faults.warn("reply", f"dropped a reply from {p.robot!r}: {exc}")
             return
         state.stats["recv.reply"] += 1
         if "ok" in body:

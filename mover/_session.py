@@ -23,33 +23,10 @@ from zenoh import Reply, Session
 from ._bridge import Portal
 from ._config import NodeConfig
 from ._exceptions import MoverError
+from ._ratelog import RateLog
 from ._wire import Opener, Sealer, Sessions
 
 log = logging.getLogger("mover.node")
-
-
-class FaultLog:
-    """Logs faults (refused frames, dropped decisions), at most ``burst`` lines per source per
-    ``interval`` seconds, so that a flood of bad frames cannot flood the logs."""
-
-    def __init__(self, owner: str, *, burst: int = 20, interval: float = 60.0) -> None:
-        self.owner = owner
-        self.burst = burst
-        self.interval = interval
-        self._counts: Counter[str] = Counter()
-        self._window = 0.0
-
-    def warn(self, source: str, message: str) -> None:
-        """Log ``message`` (a fault seen from ``source``) unless its quota is used up."""
-        now = time.monotonic()
-        if now - self._window > self.interval:
-            self._counts.clear()
-            self._window = now
-        if len(self._counts) >= 4096 and source not in self._counts:
-            source = "(others)"  # bounded however many sources there are
-        self._counts[source] += 1
-        if self._counts[source] <= self.burst:
-            log.warning("%s: %s", self.owner, message)
 
 
 @dataclass(eq=False)
@@ -71,12 +48,12 @@ class SessionState:
     started: float = field(default_factory=time.time)
     peers: Sessions = field(default_factory=Sessions)
     stats: Counter[str] = field(default_factory=Counter)
-    faults: FaultLog = field(init=False)
+    faults: RateLog = field(init=False)
     zenoh: Session | None = None  # the zenoh session while open
     portal: Portal | None = None  # the door into the loop while open
 
     def __post_init__(self) -> None:
-        self.faults = FaultLog(self.name)
+        self.faults = RateLog(self.name, log)
 
     @property
     def is_open(self) -> bool:

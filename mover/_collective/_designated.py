@@ -28,7 +28,7 @@ from .._exceptions import (
     WireError,
 )
 from .._futures import failure
-from .._session import FaultLog
+from .._ratelog import RateLog
 from ._operations import Operations
 from ._reach import wait_reachable
 from ._step import (
@@ -65,7 +65,7 @@ class Collectives:
         self._policies: dict[str, Policy] = {}  # run -> its policy, the latest STEP_MEMORY runs
         self._steps: dict[tuple[str, int], Step] = {}
         self.operations = Operations()  # this member's, for the designated one's or_passed
-        self._faults = FaultLog(node.name)
+        self._faults = RateLog(node.name, log)
         self._owners: asyncio.TaskGroup | None = None  # owns each served step's own group
         self._closed = False
         self._gone: set[str] = set()  # members lost (past the grace) and not back since
@@ -230,7 +230,7 @@ class Collectives:
                     raise WireError("not [run, step, decision]")
                 decision = Decision.from_wire(data[2])
             except WireError as exc:
-                self._faults.warn(message.sender, f"dropped a decision: {exc}")
+                self._faults.warn("decision", f"dropped a decision from {message.sender!r}: {exc}")
                 continue
             state = self._record(data[0], data[1])
             if not state.decision.done():
