@@ -20,64 +20,17 @@ import argparse
 import asyncio
 import hashlib
 import json
-import os
-import re
 import statistics
 import sys
 import tempfile
 import time
-from contextlib import AsyncExitStack
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from mover.testing import cpu_hogs, stutter  # noqa: E402
-from sim_hw.continuous import read_recording  # noqa: E402
-
-
-def report(out: str) -> str:
-    """The demo's report without its wall-clock figures."""
-    text = out.split("== report ==", 1)[-1]
-    kept = [
-        re.sub(r"wall +\d+\.\d+ +", "", line)
-        for line in text.splitlines()
-        if not line.startswith(("wall time", "trajectories:"))
-    ]
-    return "\n".join(kept)
-
-
-def first_difference(a: Path, b: Path) -> str:
-    """The first tick whose commands differ between two recordings."""
-    one, two = ({t["tick"]: t for t in read_recording(p)[1]} for p in (a, b))
-    for tick in sorted(set(one) & set(two)):
-        if one[tick]["commands"] != two[tick]["commands"]:
-            return f"commands first differ at tick {tick}"
-    return "commands agree on every tick both have"
-
-
-async def run_once(out: Path, seed: int, stall: int | None) -> tuple[int, str, float]:
-    """One ``mover demo``; its status, output and wall seconds."""
-    t0 = time.perf_counter()
-    proc = await asyncio.create_subprocess_exec(
-        sys.executable,
-        "-m",
-        "mover",
-        "demo",
-        "--seed",
-        str(seed),
-        "--out",
-        str(out),
-        cwd=ROOT,
-        env={**os.environ, "PYTHONPATH": str(ROOT)},
-        stdout=asyncio.subprocess.PIPE,
-        stderr=asyncio.subprocess.STDOUT,
-    )
-    async with AsyncExitStack() as stack:
-        if stall is not None:
-            await stack.enter_async_context(stutter(proc.pid, stall))
-        text, _ = await asyncio.wait_for(proc.communicate(), 300)
-    return proc.returncode or 0, text.decode(), time.perf_counter() - t0
+from experiments.demo_runs import first_difference, report, run_demo  # noqa: E402
+from mover.testing import cpu_hogs  # noqa: E402
 
 
 async def main(args: argparse.Namespace) -> dict[str, object]:
@@ -88,7 +41,10 @@ async def main(args: argparse.Namespace) -> dict[str, object]:
     with cpu_hogs(args.hogs):
         for i in range(args.runs):
             out = base / f"run{i}"
-            code, text, wall = await run_once(out, args.seed, i if args.stalls else None)
+            t0 = time.perf_counter()
+            stall = i if args.stalls else None
+            code, text = await run_demo(out, "--seed", str(args.seed), stall_seed=stall)
+            wall = time.perf_counter() - t0
             walls.append(wall)
             if code != 0:
                 failed += 1
@@ -98,9 +54,10 @@ async def main(args: argparse.Namespace) -> dict[str, object]:
             digest = hashlib.sha256(recording.read_bytes()).hexdigest()[:16]
             said = ""
             if recordings and digest not in recordings:
-                said = "; " + first_difference(next(iter(recordings.values())), recording)
+                first = first_difference(next(iter(recordings.values())), recording)
+                said = "; " + first.replace("\n", "; ")
             recordings.setdefault(digest, recording)
-            reports.add(report(text))
+            reports.add("\n".join(report(text)))
             print(f"run {i}: recording {digest}, {wall:.1f} s{said}")
     return {
         "runs": args.runs,

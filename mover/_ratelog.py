@@ -18,7 +18,7 @@ import asyncio
 import logging
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import KW_ONLY, dataclass, field
 
 MAX_CAUSES = 64
 
@@ -37,26 +37,20 @@ class _Window:
     last: str = ""
 
 
+@dataclass
 class RateLog:
-    """One WARNING line per cause per ``interval`` seconds, with a count (see the module)."""
+    """One WARNING line per cause per ``interval`` seconds, with a count (see the module):
+    ``owner`` begins each line; ``clock`` and ``schedule`` are the loop's unless a test's."""
 
-    def __init__(
-        self,
-        owner: str,
-        logger: logging.Logger,
-        *,
-        interval: float = 10.0,
-        clock: Callable[[], float] = time.monotonic,
-        schedule: Schedule = _on_loop,
-    ) -> None:
-        self.owner = owner
-        self.interval = interval
-        self._log = logger
-        self._clock = clock
-        self._schedule = schedule
-        self._windows: dict[str, _Window] = {}
-        self.counts: dict[str, int] = {}
-        """Every fault seen, by cause (logged or not)."""
+    owner: str
+    logger: logging.Logger
+    _: KW_ONLY
+    interval: float = 10.0
+    clock: Callable[[], float] = time.monotonic
+    schedule: Schedule = _on_loop
+    counts: dict[str, int] = field(default_factory=dict)
+    """Every fault seen, by cause (logged or not)."""
+    _windows: dict[str, _Window] = field(default_factory=dict)
 
     def warn(self, cause: str, message: str) -> None:
         """A fault of ``cause``: logged now if it is the first of an interval, else counted."""
@@ -68,17 +62,17 @@ class RateLog:
             window.count += 1
             window.last = message
             return
-        self._windows[cause] = _Window(self._clock())
-        self._log.warning("%s: %s", self.owner, message)
-        self._schedule(self.interval, lambda: self._close(cause))
+        self._windows[cause] = _Window(self.clock())
+        self.logger.warning("%s: %s", self.owner, message)
+        self.schedule(self.interval, lambda: self._close(cause))
 
     def _close(self, cause: str) -> None:
         """The interval of ``cause`` ended: say how many were counted, or forget the cause."""
         window = self._windows.pop(cause, None)
         if window is None or window.count == 0:
             return
-        took = self._clock() - window.opened
+        took = self.clock() - window.opened
         more = f"(and {window.count} more like it in the last {took:.0f} s)"
-        self._log.warning("%s: %s %s", self.owner, window.last, more)
-        self._windows[cause] = _Window(self._clock())
-        self._schedule(self.interval, lambda: self._close(cause))
+        self.logger.warning("%s: %s %s", self.owner, window.last, more)
+        self._windows[cause] = _Window(self.clock())
+        self.schedule(self.interval, lambda: self._close(cause))

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import asyncio
 import os
-import re
 import signal
 import subprocess
 import sys
@@ -13,36 +12,11 @@ from pathlib import Path
 
 import pytest
 
-from mover.testing import cpu_hogs, stutter
-from sim_hw.continuous import read_recording
+from experiments.demo_runs import first_difference, report, run_demo
+from mover.testing import cpu_hogs
 from tests.helpers.procs import ROOT
 
 pytestmark = pytest.mark.processes
-
-
-async def run_demo(tmp_path: Path, *args: str, stall_seed: int | None = None) -> tuple[int, str]:
-    """``mover demo`` with ``args``, its output in ``tmp_path``; with ``stall_seed``, its
-    processes are SIGSTOPped for short moments as it runs (:func:`stutter`)."""
-    proc = await asyncio.create_subprocess_exec(
-        sys.executable,
-        "-m",
-        "mover._cli",
-        "demo",
-        "--out",
-        str(tmp_path),
-        *args,
-        cwd=ROOT,
-        env={**os.environ, "PYTHONPATH": str(ROOT)},
-        stdout=asyncio.subprocess.PIPE,
-        stderr=asyncio.subprocess.STDOUT,
-    )
-    if stall_seed is None:
-        out, _ = await asyncio.wait_for(proc.communicate(), 120)
-    else:
-        async with stutter(proc.pid, stall_seed) as stops:
-            out, _ = await asyncio.wait_for(proc.communicate(), 180)
-        print(f"{len(stops)} stops of the demo's processes, {sum(s for _, s in stops):.1f} s")
-    return proc.returncode or 0, out.decode()
 
 
 async def test_hello_team_demo_runs_on_processes(tmp_path: Path) -> None:
@@ -114,37 +88,6 @@ async def test_the_demo_fails_fast_with_the_worlds_error_when_it_rejects_its_fil
     assert f"mover demo: world file {bad}:3: world.size: must be a list of 2 numbers" in out
     assert "each > 0 and at most 1000, got [10000000.0, 10000000.0]" in out
     assert "Traceback" not in out
-
-
-def report(out: str) -> list[str]:
-    """The demo's report without its wall-clock figures: outcomes, simulated phase times,
-    messages per step, how far each box moved."""
-    lines = out.split("== report ==", 1)[1].splitlines()
-    kept = []
-    for line in lines:
-        if line.startswith("wall time") or line.startswith("trajectories:"):
-            continue
-        kept.append(re.sub(r"wall +\d+\.\d+ +", "", line))  # a phase: its simulated time only
-    return kept
-
-
-def first_difference(a: Path, b: Path) -> str:
-    """Where two recordings of one world part: the first tick whose commands differ, and
-    the first whose poses do (a diagnosis for a run that did not repeat)."""
-    ticks = [{t["tick"]: t for t in read_recording(p)[1]} for p in (a, b)]
-    said = []
-    for key in ("commands", "robots"):
-        for tick in sorted(set(ticks[0]) & set(ticks[1])):
-            one, two = ticks[0][tick][key], ticks[1][tick][key]
-            if one != two:
-                robots = sorted(r for r in {*one, *two} if one.get(r) != two.get(r))
-                said.append(
-                    f"{key} first differ at tick {tick}: "
-                    + "; ".join(f"{r}: {one.get(r)} against {two.get(r)}" for r in robots)
-                )
-                break
-    ends = [max(t) if t else None for t in ticks]
-    return "\n".join(said or [f"the recordings agree up to their ends (ticks {ends})"])
 
 
 @pytest.mark.slow
