@@ -13,10 +13,13 @@ the client to the target, ``down``: back) has an :class:`Impairment`, read per c
 be changed while connections are open.
 
 What a chunk (one read, at most ``CHUNK`` bytes) goes through: a one-way ``delay`` plus a
-uniform ``jitter`` of ± that much (clamped at 0); with probability ``loss``, a further
-``retransmit`` seconds. That is how loss looks to an application over TCP: the bytes are never
-lost, they come late (by a retransmission timeout: Linux's least is 200 ms, the default here),
-and everything behind them waits too. A chunk is never delivered before the one read before it
+uniform ``jitter`` of ± that much (clamped at 0); and it is 'lost' with probability ``loss``,
+and so is each retransmission of it, each loss adding a retransmission timeout that doubles
+(``retransmit``, then twice that, ...; at most ``MAX_RETRIES`` losses in a row). That is how
+loss looks to an application over TCP: the bytes are never lost, they come late (Linux's least
+timeout is 200 ms, the default here; it backs off by doubling), and everything behind them
+waits too. At 10 % loss one chunk in a hundred is lost twice (0.6 s late) and one in a thousand
+three times (1.4 s: past a 1 s lease). A chunk is never delivered before the one read before it
 (per connection and direction: byte order is TCP's), so a short delay drawn after a long one
 becomes the long one. :meth:`ImpairProxy.stall` holds every delivery for some seconds (a router
 or a radio that goes silent; connections stay open). Each direction of a connection buffers at
@@ -34,16 +37,20 @@ import socket
 import time
 from dataclasses import dataclass, field
 
-__all__ = ["CHUNK", "ImpairProxy", "Impairment", "ProxyStats"]
+__all__ = ["CHUNK", "MAX_RETRIES", "ImpairProxy", "Impairment", "ProxyStats"]
 
 CHUNK = 16384
 """Bytes read at most in one chunk (the unit that is delayed or 'lost')."""
+MAX_RETRIES = 6
+"""Losses in a row of one chunk at most (as TCP gives up on a link, eventually; 6 losses at
+200 ms: 12.6 s late)."""
 
 
 @dataclass(frozen=True)
 class Impairment:
     """What one direction of a link does to each chunk: ``delay`` ± ``jitter`` seconds, and with
-    probability ``loss`` another ``retransmit`` seconds (see the module docstring)."""
+    probability ``loss`` another ``retransmit`` seconds, doubling for each loss in a row (see
+    the module docstring)."""
 
     delay: float = 0.0
     jitter: float = 0.0
@@ -54,17 +61,22 @@ class Impairment:
         if min(self.delay, self.jitter, self.retransmit) < 0 or not 0 <= self.loss <= 1:
             raise ValueError(f"bad impairment {self}: times >= 0, loss from 0 to 1")
 
-    def draw(self, rng: random.Random) -> tuple[float, bool]:
-        """Seconds one chunk is held, and whether it was 'lost' (held a retransmission longer)."""
-        wait = self.delay + (rng.uniform(-self.jitter, self.jitter) if self.jitter else 0.0)
-        lost = self.loss > 0 and rng.random() < self.loss
-        return max(0.0, wait) + (self.retransmit if lost else 0.0), lost
+    def draw(self, rng: random.Random) -> tuple[float, int]:
+        """Seconds one chunk is held, and how often it was 'lost' on the way (each loss adds a
+        retransmission timeout, doubling)."""
+        wait = max(0.0, self.delay + (rng.uniform(-self.jitter, self.jitter) if self.jitter else 0))
+        lost = 0
+        while self.loss > 0 and lost < MAX_RETRIES and rng.random() < self.loss:
+            wait += self.retransmit * 2**lost
+            lost += 1
+        return wait, lost
 
 
 @dataclass
 class ProxyStats:
-    """Counts since the proxy started: connections accepted, bytes delivered each way, chunks
-    'lost', and the most bytes one direction of one connection held at once."""
+    """Counts since the proxy started: connections accepted, bytes delivered each way, losses
+    (a chunk lost twice counts twice), and the most bytes one direction of one connection held
+    at once."""
 
     connections: int = 0
     bytes_up: int = 0

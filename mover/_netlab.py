@@ -388,3 +388,27 @@ def _close_all() -> None:
 
 
 atexit.register(_close_all)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m mover._netlab --sweep [--all]``: remove the leftovers of dead labs (with
+    ``--all``, of every lab: when no test is running); prints what it removed."""
+    import argparse
+
+    parser = argparse.ArgumentParser(prog="python -m mover._netlab", description=main.__doc__)
+    parser.add_argument("--sweep", action="store_true", help="remove dead labs' leftovers")
+    parser.add_argument("--all", action="store_true", help="with --sweep: every lab's")
+    args = parser.parse_args(argv)
+    if not args.sweep:
+        parser.print_usage()
+        return 2
+    if reason := unavailable():
+        print(f"python -m mover._netlab: {reason}")
+        return 1
+    for name in sweep(all_tags=args.all):
+        print(f"removed {name}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
