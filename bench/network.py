@@ -17,10 +17,11 @@ run`` (:mod:`mover._netteam`). Each scenario is one run of ``teams/search_and_re
 Each run prints one line (its outcome); the last line is one JSON object with what can be
 measured so far: ``rtf_lockstep_clean`` and ``rtf_lockstep_rtt100`` (simulated seconds per
 wall second of the run), ``partition_5s_added_s`` (seconds the partition added to the clean
-run; null when the run failed), ``spurious_member_lost_loss10`` (lines telling of a lost member
-or world under loss, none of which died), and per scenario ``code`` (``mover run``'s exit; null:
-stopped at the time allowed), ``run_s``, ``sim_s`` (the last tick recorded), ``losses`` and
-``tracebacks`` per process. Needs root and ``ip netns``; leaves no namespace or process.
+run; null when the run failed), ``spurious_member_lost_loss10`` (members said to be lost under
+loss: none died), and per scenario ``code`` (``mover run``'s exit; null: stopped at the time
+allowed), ``run_s``, ``sim_s`` (the last tick recorded), ``losses`` (lines telling of a lost
+member or world, per process), ``lost_members`` and ``tracebacks`` per process. Needs root and
+``ip netns``; leaves no namespace or process.
 """
 
 from __future__ import annotations
@@ -36,7 +37,7 @@ from typing import Any
 
 from mover._impair import Impairment
 from mover._netlab import Netlab, unavailable
-from mover._netteam import TeamAcrossHosts, last_tick, losses
+from mover._netteam import TeamAcrossHosts, last_tick, losses, lost_members
 from mover._up import load_team
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -92,6 +93,7 @@ async def scenario(
         "run_s": None if result.run_s is None else round(result.run_s, 1),
         "sim_s": sim,
         "losses": losses(result, team),
+        "lost_members": sorted(lost_members(result, team)),
         "tracebacks": team.tracebacks(),
         "proxy": {"connections": proxy.stats.connections, "lost_chunks": proxy.stats.lost},
     }
@@ -120,8 +122,7 @@ def headline(found: dict[str, dict[str, Any]]) -> dict[str, Any]:
         ok = p["code"] == 0 and c["code"] == 0
         keys["partition_5s_added_s"] = round(p["run_s"] - c["run_s"], 1) if ok else None
     if "loss10" in found:
-        lost = found["loss10"]["losses"]
-        keys["spurious_member_lost_loss10"] = sum(lost.values())
+        keys["spurious_member_lost_loss10"] = len(found["loss10"]["lost_members"])
     return keys
 
 

@@ -12,7 +12,8 @@ Host ``router`` (default a) runs ``mover router`` with the config of ``mover rou
 --gen-config`` (certificates for the world, every member and ``workstation``, the ACL) and the
 world; host ``members`` (default b) runs every robot and workstation group of the file, joining
 through an :class:`~mover._impair.ImpairProxy` in the router's host (``team.proxy``; it
-impairs nothing until told to) when ``proxied`` (default); host ``workstation`` (default c) runs
+impairs nothing until told to; its draws seeded by the run seed) when ``proxied``
+(default); host ``workstation`` (default c) runs
 ``mover run`` with the file's program, run name and program seed, as ``mover up`` would start
 it. The world and the members are started with the command lines of ``mover up``
 (:mod:`mover._up._plan`), so a seed gives the run ``mover up``/``mover demo`` give it on one
@@ -42,7 +43,15 @@ from ._procs import Child, stop
 from ._up._plan import Seeds, member_argv, seeds, world_argv
 from ._up._teamfile import TeamPlan
 
-__all__ = ["LOSSES", "WORKSTATION", "RunResult", "TeamAcrossHosts", "last_tick", "losses"]
+__all__ = [
+    "LOSSES",
+    "WORKSTATION",
+    "RunResult",
+    "TeamAcrossHosts",
+    "last_tick",
+    "losses",
+    "lost_members",
+]
 
 WORKSTATION = "workstation"
 """The certificate name ``mover run`` uses."""
@@ -142,7 +151,7 @@ class TeamAcrossHosts:
         a = self.lab[self.where["router"]]
         await asyncio.to_thread(generate_config, tls, self.plan.name, names, a.address, ROUTER_PORT)
         if self.proxied:  # the members' host joins through the proxy, in the router's host
-            self.proxy = ImpairProxy((a.address, ROUTER_PORT))
+            self.proxy = ImpairProxy((a.address, ROUTER_PORT), seed=self.seeds.run)
             await self.proxy.start((a.address, PROXY_PORT), netns=a.ns)
             for m in self.plan.members:
                 path = tls / f"member-{m.name}.json"
@@ -301,6 +310,22 @@ def losses(result: RunResult, team: TeamAcrossHosts) -> dict[str, int]:
     if in_run:
         found["run"] = in_run
     return found
+
+
+_NAMED = re.compile(r"lost \[([^\]]*)\]|'?([\w-]+)'? left the team")
+
+
+def lost_members(result: RunResult, team: TeamAcrossHosts) -> set[str]:
+    """The members some process or ``mover run`` said were lost (or left the team)."""
+    lines = [line for v in team.log_lines(LOSSES).values() for line in v]
+    lines += [line for _, line in result.lines]
+    names: set[str] = set()
+    for line in lines:
+        for listed, one in _NAMED.findall(line):
+            names.update(n.strip(" '\"") for n in listed.split(",") if n.strip())
+            if one:
+                names.add(one)
+    return names
 
 
 def last_tick(recording: Path) -> float | None:
