@@ -91,7 +91,7 @@ async def scenario(
         "code": result.code,
         "up_s": round(up_s, 1),
         "run_s": None if result.run_s is None else round(result.run_s, 1),
-        "sim_s": sim,
+        "sim_s": None if sim is None else round(sim, 2),
         "losses": losses(result, team),
         "lost_members": sorted(lost_members(result, team)),
         "tracebacks": team.tracebacks(),

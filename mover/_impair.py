@@ -232,7 +232,6 @@ class ImpairProxy:
             deliver.cancel()
             with contextlib.suppress(asyncio.CancelledError):
                 await deliver
-            writer.close()
 
     async def _deliver(self, pipe: _Pipe, writer: asyncio.StreamWriter, way: str) -> None:
         while True:

@@ -171,18 +171,19 @@ class TeamAcrossHosts:
             self.members.append(await self._spawn(self.where["members"], m.name, argv))
 
     def _env(self, cert: str) -> dict[str, str]:
+        """The environment of the process with certificate ``cert`` (the router: its own
+        config file, no member's)."""
         env = {k: v for k, v in os.environ.items() if not k.startswith("MOVER_")}
-        return {
-            **env,
-            **self.team.env(),
-            "MOVER_MODE": "client",
-            "MOVER_LISTEN": "",
-            "MOVER_CONNECT": "",
-            "MOVER_ZENOH_CONFIG": str(self.out / "tls" / f"member-{cert}.json"),
-            "MOVER_LOG_LEVEL": self.log_level,
-            "PYTHONUNBUFFERED": "1",
-            **self.extra_env,
-        }
+        env |= {"MOVER_LOG_LEVEL": self.log_level, "PYTHONUNBUFFERED": "1"}
+        if cert != "router":
+            env |= {
+                **self.team.env(),
+                "MOVER_MODE": "client",
+                "MOVER_LISTEN": "",
+                "MOVER_CONNECT": "",
+                "MOVER_ZENOH_CONFIG": str(self.out / "tls" / f"member-{cert}.json"),
+            }
+        return env | self.extra_env
 
     async def _spawn(
         self, host: str, name: str, args: list[str] | tuple[str, ...], ready: str | None = None
