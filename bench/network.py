@@ -85,18 +85,19 @@ async def scenario(
                         team.stall_router(False)
                 fault = f"{name} {FAULT_FOR:g} s at +{FAULT_AT:g} s"
         result = await run
+        # read before the team stops (a stop makes members leave, and the world says so)
+        figures: dict[str, Any] = {
+            "code": result.code,
+            "up_s": round(up_s, 1),
+            "run_s": None if result.run_s is None else round(result.run_s, 1),
+            "losses": losses(result, team),
+            "lost_members": sorted(lost_members(result, team)),
+            "proxy": {"connections": proxy.stats.connections, "lost_chunks": proxy.stats.lost},
+        }
     # the team is stopped: the recording is complete
     sim = last_tick(team.recording)
-    figures: dict[str, Any] = {
-        "code": result.code,
-        "up_s": round(up_s, 1),
-        "run_s": None if result.run_s is None else round(result.run_s, 1),
-        "sim_s": None if sim is None else round(sim, 2),
-        "losses": losses(result, team),
-        "lost_members": sorted(lost_members(result, team)),
-        "tracebacks": team.tracebacks(),
-        "proxy": {"connections": proxy.stats.connections, "lost_chunks": proxy.stats.lost},
-    }
+    figures["sim_s"] = None if sim is None else round(sim, 2)
+    figures["tracebacks"] = team.tracebacks()
     if fault:
         figures["fault"] = fault
     failed = [line for _, line in result.lines if "FAILED" in line or "mover run:" in line]
@@ -150,4 +151,8 @@ if __name__ == "__main__":
     parser.add_argument(
         "--rtt-for", type=float, default=40.0, help="seconds the rtt100 run is given"
     )
-    sys.exit(asyncio.run(main(parser.parse_args())))
+    try:
+        sys.exit(asyncio.run(main(parser.parse_args())))
+    except KeyboardInterrupt:  # the lab and the team are down by now
+        print("bench/network.py: interrupted", file=sys.stderr)
+        sys.exit(130)

@@ -93,8 +93,10 @@ async def test_hosts_reach_each_other_a_partition_cuts_one_off_and_a_raise_leave
 
 LAB_THEN_WAIT = textwrap.dedent(
     """
-    import asyncio, sys
+    import asyncio, signal, sys
     from mover.testing import Netlab
+
+    signal.signal(signal.SIGINT, signal.default_int_handler)  # as at a terminal (CI may ignore it)
 
     async def main():
         async with Netlab(("a", "b")) as lab:
