@@ -13,6 +13,15 @@
 :func:`cpu_hogs` and :func:`stutter` load the machine and stall a run's processes for moments,
 for tests that a seeded run repeats however it is scheduled.
 
+Across hosts (Linux, root): :class:`Netlab` makes hosts of network namespaces on one bridge
+(partitions: a host's cable pulled), :class:`ImpairProxy` a bad link in user space (delay,
+jitter, late "lost" chunks, stalls), and :class:`TeamAcrossHosts` a team file's team on them,
+every process a client of an mTLS router; :func:`netlab_unavailable` says why not here::
+
+    async with Netlab(("a", "b", "c")) as lab, TeamAcrossHosts(lab, load_team(f), out=d) as team:
+        team.proxy.down = Impairment(0.05, 0.02, loss=0.1)
+        result = await team.run_program(timeout=120)
+
 Every process gets a fresh team key and connects to a seed port chosen at run time (multicast
 scouting off); everything started is killed on exit, and dies with this process even when it is
 SIGKILLed (Linux: a parent-death signal). ``pytest`` users get the same as fixtures from
@@ -32,18 +41,28 @@ from pathlib import Path
 from typing import Any
 
 from ._config import NodeConfig, TeamCredentials, free_port
+from ._impair import Impairment, ImpairProxy
 from ._load import cpu_hogs, descendants, stutter
+from ._netlab import Netlab, NetlabError
+from ._netlab import unavailable as netlab_unavailable
+from ._netteam import TeamAcrossHosts
 from ._node import Node
 from ._procs import Child, ProcessExited, start, stop
 from ._programs import ProgramHost
 
 __all__ = [
     "Cluster",
+    "ImpairProxy",
+    "Impairment",
+    "Netlab",
+    "NetlabError",
     "ProcessExited",
+    "TeamAcrossHosts",
     "cluster",
     "cpu_hogs",
     "descendants",
     "first_line",
+    "netlab_unavailable",
     "serve_programs",
     "stutter",
 ]

@@ -1,0 +1,158 @@
+"""Search and rescue across hosts, on a clean and a bad network (issue 23's figures).
+
+    sudo python bench/network.py [--scenario all|clean|rtt100|partition|stall|loss10]
+                                 [--seed 1] [--out DIR] [--timeout 120]
+
+Builds three hosts (network namespaces, :mod:`mover._netlab`): a runs ``mover router`` (mutual
+TLS and the ACL of ``mover router --gen-config``) and the lock-step world, b the three robots,
+joining through an impairment proxy in a (:mod:`mover._impair`), c the workstation's ``mover
+run`` (:mod:`mover._netteam`). Each scenario is one run of ``teams/search_and_rescue.toml``:
+
+- ``clean``: nothing impaired.
+- ``rtt100``: 50 ms each way on b's links (a 100 ms round trip); stopped after ``--rtt-for`` s.
+- ``partition``: b's cable pulled for 5 s, 3 s into the run.
+- ``stall``: the router SIGSTOPped for 5 s, 3 s into the run.
+- ``loss10``: b's links 50 ± 20 ms each way with 10 % of chunks a retransmission (200 ms) late.
+
+Each run prints one line (its outcome); the last line is one JSON object with what can be
+measured so far: ``rtf_lockstep_clean`` and ``rtf_lockstep_rtt100`` (simulated seconds per
+wall second of the run), ``partition_5s_added_s`` (seconds the partition added to the clean
+run; null when the run failed), ``spurious_member_lost_loss10`` (members said to be lost under
+loss: none died), and per scenario ``code`` (``mover run``'s exit; null: stopped at the time
+allowed), ``run_s``, ``sim_s`` (the last tick recorded), ``losses`` (lines telling of a lost
+member or world, per process), ``lost_members`` and ``tracebacks`` per process. Needs root and
+``ip netns``; leaves no namespace or process.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import json
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+from mover._impair import Impairment
+from mover._netlab import Netlab, unavailable
+from mover._netteam import TeamAcrossHosts, last_tick, losses, lost_members
+from mover._up import load_team
+
+ROOT = Path(__file__).resolve().parents[1]
+TEAM_FILE = ROOT / "teams" / "search_and_rescue.toml"
+SCENARIOS = ("clean", "rtt100", "partition", "stall", "loss10")
+FAULT_AT = 3.0
+"""Seconds into the run a partition or a stall begins."""
+FAULT_FOR = 5.0
+
+
+async def scenario(
+    name: str, out: Path, seed: int, timeout: float, rtt_for: float
+) -> dict[str, Any]:
+    """Run one scenario; its figures."""
+    plan = load_team(TEAM_FILE)
+    t0 = time.monotonic()
+    async with (
+        Netlab(("a", "b", "c")) as lab,
+        TeamAcrossHosts(lab, plan, out=out, seed=seed) as team,
+    ):
+        up_s = time.monotonic() - t0
+        proxy = team.proxy
+        assert proxy is not None
+        if name == "rtt100":
+            proxy.up = proxy.down = Impairment(0.05)
+            timeout = rtt_for
+        elif name == "loss10":
+            proxy.up = proxy.down = Impairment(0.05, 0.02, loss=0.1)
+        run = asyncio.create_task(team.run_program(timeout=timeout))
+        fault = ""
+        if name in ("partition", "stall"):
+            started = asyncio.create_task(team.run_started.wait())
+            await asyncio.wait({run, started}, timeout=60, return_when="FIRST_COMPLETED")
+            started.cancel()
+            if team.run_started.is_set() and not run.done():
+                await asyncio.sleep(FAULT_AT)
+                if name == "partition":
+                    async with lab.partition("b", FAULT_FOR):
+                        pass
+                else:
+                    team.stall_router(True)
+                    try:
+                        await asyncio.sleep(FAULT_FOR)
+                    finally:
+                        team.stall_router(False)
+                fault = f"{name} {FAULT_FOR:g} s at +{FAULT_AT:g} s"
+        result = await run
+        # read before the team stops (a stop makes members leave, and the world says so)
+        figures: dict[str, Any] = {
+            "code": result.code,
+            "up_s": round(up_s, 1),
+            "run_s": None if result.run_s is None else round(result.run_s, 1),
+            "losses": losses(result, team),
+            "lost_members": sorted(lost_members(result, team)),
+            "proxy": {"connections": proxy.stats.connections, "lost_chunks": proxy.stats.lost},
+        }
+    # the team is stopped: the recording is complete
+    sim = last_tick(team.recording)
+    figures["sim_s"] = None if sim is None else round(sim, 2)
+    figures["tracebacks"] = team.tracebacks()
+    if fault:
+        figures["fault"] = fault
+    failed = [line for _, line in result.lines if "FAILED" in line or "mover run:" in line]
+    figures["said"] = failed[:4]
+    return figures
+
+
+def headline(found: dict[str, dict[str, Any]]) -> dict[str, Any]:
+    """Issue 23's keys, from the scenarios run."""
+
+    def rtf(s: dict[str, Any]) -> float | None:
+        if not s.get("sim_s") or not s.get("run_s"):
+            return None
+        return round(float(s["sim_s"]) / float(s["run_s"]), 2)
+
+    keys: dict[str, Any] = {}
+    if "clean" in found:
+        keys["rtf_lockstep_clean"] = rtf(found["clean"])
+    if "rtt100" in found:
+        keys["rtf_lockstep_rtt100"] = rtf(found["rtt100"])
+    if "partition" in found and "clean" in found:
+        p, c = found["partition"], found["clean"]
+        ok = p["code"] == 0 and c["code"] == 0
+        keys["partition_5s_added_s"] = round(p["run_s"] - c["run_s"], 1) if ok else None
+    if "loss10" in found:
+        keys["spurious_member_lost_loss10"] = len(found["loss10"]["lost_members"])
+    return keys
+
+
+async def main(args: argparse.Namespace) -> int:
+    if reason := unavailable():
+        print(f"bench/network.py: {reason}", file=sys.stderr)
+        return 2
+    names = SCENARIOS if args.scenario == "all" else (args.scenario,)
+    out = Path(args.out or tempfile.mkdtemp(prefix="mover-network-"))
+    found: dict[str, dict[str, Any]] = {}
+    for name in names:
+        figures = await scenario(name, out / name, args.seed, args.timeout, args.rtt_for)
+        found[name] = figures
+        print(f"{name}: {json.dumps(figures)}", flush=True)
+    print(json.dumps({"seed": args.seed, "out": str(out), **headline(found), "scenarios": found}))
+    return 0
+
+
+if __name__ == "__main__":
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--scenario", choices=("all", *SCENARIOS), default="all")
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--out", help="folder for each run's logs and recording (default: a temp)")
+    parser.add_argument("--timeout", type=float, default=120.0, help="seconds a run may take")
+    parser.add_argument(
+        "--rtt-for", type=float, default=40.0, help="seconds the rtt100 run is given"
+    )
+    try:
+        sys.exit(asyncio.run(main(parser.parse_args())))
+    except KeyboardInterrupt:  # the lab and the team are down by now
+        print("bench/network.py: interrupted", file=sys.stderr)
+        sys.exit(130)
