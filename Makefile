@@ -24,7 +24,7 @@ demo: $(STAMP)
 
 lint: $(STAMP)
 	$(PY) -m ruff check $(CODE)
-	$(PY) -m ruff format --check $(CODE) README.md
+	$(PY) -m ruff format --check $(CODE) README.md docs
 	$(PY) -m mypy
 
 check: lint
