@@ -284,7 +284,13 @@ class Collectives:
                 self._start_owner(state)  # (its group opens with a later loop turn)
                 asyncio.get_running_loop().call_soon(self._ask_passed, state, member, t)
             return
-        state.asking[member] = state.tasks.create_task(self._question(state, member, t))
+        if self._closed or state.decision.done():
+            return  # nobody is left to tell the answer to, or it is no longer needed
+        question = self._question(state, member, t)
+        try:
+            state.asking[member] = state.tasks.create_task(question)
+        except RuntimeError:  # the owner's group is shutting down (the node is closing)
+            question.close()
 
     async def _question(self, state: Step, member: str, t: float) -> None:
         try:
