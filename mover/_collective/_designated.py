@@ -4,11 +4,15 @@ It owns every step's record on this node (:class:`~._step.Step`) and is the only
 its decision, whichever way the decision becomes known here: decided as the step's designated
 member (from the claims, polls and results of the others; announced at once, in one broadcast),
 heard in another's announcement, or told to this node's own member in an answer. It asks the
-others ``or_passed`` (:class:`~._operations.Operations` answers it) in a TaskGroup of the step's
-own, which ends, awaited, when the step is decided; the steps' groups belong to one TaskGroup of
-the node's. A member lost at any moment fails (policy ``fail``) every undecided step it is a
-member of, served here already or later (it is remembered, while it stays gone). Protocol and
-costs: ``docs/collectives.md``. Memory: the last ``STEP_MEMORY`` steps and runs.
+others ``or_passed`` (:class:`~._operations.Operations` answers it) and, taking a step over from
+a designated member that is gone, ``step_known``: the gone one may have decided the step and
+told some members before it died, and a decision once made is the one every member ends with,
+so a successor decides only once every live member has said what it knows (or that its run
+ended here), and adopts a decision one of them holds. Its questions run in a TaskGroup of the
+step's own, which ends, awaited, when the step is decided; the steps' groups belong to one
+TaskGroup of the node's. A member lost at any moment fails (policy ``fail``) every undecided
+step it is a member of, served here already or later (it is remembered, while it stays gone).
+Protocol and costs: ``docs/collectives.md``. Memory: the last ``STEP_MEMORY`` steps and runs.
 """
 
 from __future__ import annotations
@@ -16,7 +20,8 @@ from __future__ import annotations
 import asyncio
 import logging
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Awaitable, Callable, Sequence
+from functools import partial
 from typing import TYPE_CHECKING, Any
 
 from .._exceptions import (
@@ -49,6 +54,7 @@ log = logging.getLogger("mover.tasks")
 OR_JOIN = "mover.or_join"
 OR_CLAIM = "mover.or_claim"
 OR_PASSED = "mover.or_passed"
+STEP_KNOWN = "mover.step_known"
 AND_DONE = "mover.and_done"
 AND_JOIN = "mover.and_join"
 AND_PUT = "mover.and_put"
@@ -78,6 +84,7 @@ class Collectives:
             OR_JOIN: self.or_join,
             OR_CLAIM: self.or_claim,
             OR_PASSED: self.operations.or_passed,
+            STEP_KNOWN: self.step_known,
             AND_DONE: self.and_done,
             AND_JOIN: self.and_join,
             AND_PUT: self.and_put,
@@ -167,7 +174,8 @@ class Collectives:
             state.served, state.kind, state.members = True, kind, frozenset(members)
             name, alive = self.node.name, self.node.membership
             state.lost = [m for m in members if m < name and m not in alive]
-            state.takeover = bool(state.lost)
+            # (an all-to-all AND has no designated member: each receiver counts for itself)
+            state.takeover = bool(state.lost) and kind != "and_all"
             # Lost before the step was served here (before any member reached it, say): as
             # if lost during it (_member_left), or no one would ever count it.
             state.gone = {m for m in state.members & self._gone if m not in alive}
@@ -273,66 +281,126 @@ class Collectives:
         """Run ``run`` ended here: questions about its steps are answered "out" from now on."""
         self.operations.end_run(run)
 
-    # -- the designated member: OR -----------------------------------------------------------
+    # -- the designated member's questions ---------------------------------------------------
 
-    def _ask_passed(self, state: Step, member: str, t: float) -> None:
-        task = state.asking.get(member)
+    def _ask(self, state: Step, key: tuple[str, str], ask: Callable[[], Awaitable[None]]) -> None:
+        """Start question ``key`` (what, whom) of served step ``state``, in its group."""
+        task = state.asking.get(key)
         if task is not None and not task.done():
-            return  # one question at a time: a later answer covers an earlier time
+            return  # one question at a time: a later answer covers an earlier one
         if state.tasks is None:  # its owner is not (or no longer) under way
             if not self._closed and not state.decision.done():
                 self._start_owner(state)  # (its group opens with a later loop turn)
-                asyncio.get_running_loop().call_soon(self._ask_passed, state, member, t)
+                asyncio.get_running_loop().call_soon(self._ask, state, key, ask)
             return
         if self._closed or state.decision.done():
             return  # nobody is left to tell the answer to, or it is no longer needed
-        question = self._question(state, member, t)
+        question = self._question(key, ask)
         try:
-            state.asking[member] = state.tasks.create_task(question)
+            state.asking[key] = state.tasks.create_task(question)
         except RuntimeError:  # the owner's group is shutting down (the node is closing)
             question.close()
 
-    async def _question(self, state: Step, member: str, t: float) -> None:
+    async def _question(self, key: tuple[str, str], ask: Callable[[], Awaitable[None]]) -> None:
         try:
-            await self._passed_from(state, member, t)
+            await ask()
         except Exception as exc:  # a question that fails is not the other questions' concern
-            log.debug("%s: or_passed to %s failed: %r", self.node.name, member, exc)
+            log.debug("%s: %s question to %s failed: %r", self.node.name, *key, exc)
 
-    async def _passed_from(self, state: Step, member: str, t: float) -> None:
-        while not state.decision.done():
+    async def _answer(self, state: Step, member: str, procedure: str, *args: Any) -> Any:
+        """``member``'s answer to ``procedure(run, step, *args)`` about ``state`` (asked again
+        while it is alive); raise LookupError once it is gone (_member_left then decides)."""
+        while True:
             try:
                 if member == self.node.name:
-                    answer = await self.operations.or_passed(state.run, state.step, t)
-                else:
-                    state.questions += 1
-                    answer = await self.node.call(
-                        member, OR_PASSED, state.run, state.step, t, timeout=CALL_TIMEOUT
-                    )
+                    ask = self.procedures[procedure]
+                    return await ask(state.run, state.step, *args)
+                state.questions += 1
+                return await self.node.call(
+                    member, procedure, state.run, state.step, *args, timeout=CALL_TIMEOUT
+                )
             except CallTimeout:
                 continue  # it is alive (liveness ends the call sooner): ask again
             except (NotDelivered, RemoteError) as exc:
                 if isinstance(exc, RemoteError) and exc.remote_type != "Cancelled":
-                    # it answers, but cannot say its time (no clock, a bug): it never claims
-                    log.warning("%s: %s cannot say its time: %s", self.node.name, member, exc)
-                    answer = {"out": True}
-                elif await wait_reachable(self.node, member):
-                    continue  # lost for a moment, or its call was cancelled as it closed
-                else:
-                    return  # gone: _member_left decides, as for any step
-            except Answered as exc:
-                log.warning("%s: %s cannot say its time: %s", self.node.name, member, exc)
-                answer = {"out": True}
-            if not isinstance(answer, dict):
-                answer = {"out": True}
-            finished = answer.get("finished")
-            if isinstance(finished, (int, float)):
-                state.finished[member] = float(finished)
-            elif "passed" in answer:
-                state.beyond[member] = max(t, state.beyond.get(member, -math.inf))
-            else:
-                state.beyond[member] = math.inf
+                    raise
+                if not await wait_reachable(self.node, member):
+                    raise LookupError(member) from None
+                # lost for a moment, or its call was cancelled as it closed: ask again
+
+    def _heard_all(self, state: Step) -> bool:
+        """Whether served step ``state`` may be decided here: yes as its designated member;
+        taking it over (a designated member before this one is gone), only once every live
+        member has said what it knows, asked ``step_known`` meanwhile. The gone one may have
+        decided and told some of them: that decision is then adopted (:meth:`_known_from`)."""
+        if not state.takeover:
+            return True
+        silent = self._expected(state) - state.joined - state.results.keys() - state.said
+        for member in sorted(silent):
+            self._ask(state, ("step_known", member), partial(self._known_from, state, member))
+        return not silent
+
+    async def _known_from(self, state: Step, member: str) -> None:
+        try:
+            answer = await self._answer(state, member, STEP_KNOWN)
+        except LookupError:
+            return  # gone: _member_left decides, as for any step
+        except Answered as exc:  # it answers, but cannot say (a bug): it cannot know better
+            log.warning("%s: %s cannot say what it knows: %s", self.node.name, member, exc)
+            answer = None
+        if answer is not None and not state.decision.done():
+            try:
+                self._decide(state, Decision.from_wire(answer))  # the one decision: adopted
+                return
+            except WireError as exc:
+                self._faults.warn("known", f"{member!r} said no decision: {exc}")
+        state.said.add(member)
+        self._settle(state)
+
+    async def step_known(self, run: str, step: int) -> Any:
+        """A successor taking step ``(run, step)`` over asks what this node knows of it: its
+        decision once known here (as on the wire), or None once this node's member left the
+        run (it will never reach or join that step). A member in the step or before it answers
+        once it knows: it joins the successor meanwhile (its poll, claim or result)."""
+        state = self._record(run, step)
+        ended = self.operations.ended(run)
+        either: set[asyncio.Future[Any]] = {state.decision, ended}
+        await asyncio.wait(either, return_when=asyncio.FIRST_COMPLETED)
+        known = state.decision
+        if known.done() and not known.cancelled() and known.exception() is None:
+            return known.result().to_wire()
+        return None
+
+    def _settle(self, state: Step) -> None:
+        """Decide served step ``state`` if it can be, now."""
+        if state.kind == "or":
             self._maybe_decide(state)
-            return
+        else:
+            self._maybe_complete(state)
+
+    # -- the designated member: OR -----------------------------------------------------------
+
+    def _ask_passed(self, state: Step, member: str, t: float) -> None:
+        self._ask(state, ("or_passed", member), lambda: self._passed_from(state, member, t))
+
+    async def _passed_from(self, state: Step, member: str, t: float) -> None:
+        try:
+            answer = await self._answer(state, member, OR_PASSED, t)
+        except LookupError:
+            return  # gone: _member_left decides, as for any step
+        except Answered as exc:  # it answers, but cannot say its time (no clock, a bug)
+            log.warning("%s: %s cannot say its time: %s", self.node.name, member, exc)
+            answer = {"out": True}  # it never claims
+        if not isinstance(answer, dict):
+            answer = {"out": True}
+        finished = answer.get("finished")
+        if isinstance(finished, (int, float)):
+            state.finished[member] = float(finished)
+        elif "passed" in answer:
+            state.beyond[member] = max(t, state.beyond.get(member, -math.inf))
+        else:
+            state.beyond[member] = math.inf
+        self._maybe_decide(state)
 
     def _expected(self, state: Step) -> set[str]:
         """The members whose word the step waits for: those alive, but for those an earlier
@@ -376,7 +444,7 @@ class Collectives:
             # will never ask.
             self._tell(state)
             return
-        if state.takeover and not self._expected(state) <= state.joined:
+        if not self._heard_all(state):
             return  # a successor decides only once every live member has said what it knows
         lost = self._lost_in(state)
         if lost:
@@ -440,8 +508,8 @@ class Collectives:
         self._maybe_complete(state)
 
     def _maybe_complete(self, state: Step) -> None:
-        if state.decision.done():
-            return
+        if state.decision.done() or not self._heard_all(state):
+            return  # (as for an OR: a successor first hears every live member)
         lost = self._lost_in(state)
         if lost:
             self._decide(state, Decision("lost", lost=lost))
@@ -461,9 +529,9 @@ class Collectives:
             if not state.served or state.decision.done() or name not in state.members:
                 continue
             state.gone.add(name)
+            if name < self.node.name and state.kind != "and_all":
+                state.takeover = True  # it may have been the designated member, and decided
             if not self._expected(state):
                 self._decide(state, Decision("lost", lost=tuple(sorted(state.members))))
-            elif state.kind == "or":
-                self._maybe_decide(state)
             else:
-                self._maybe_complete(state)
+                self._settle(state)

@@ -147,9 +147,11 @@ class Step:
     timed: bool = False  # an OR decided in simulated time (its claims carry finish times)
     beyond: dict[str, float] = field(default_factory=dict)  # member: a time it went past
     finished: dict[str, float] = field(default_factory=dict)  # member: its answered finish
-    asking: dict[str, asyncio.Task[None]] = field(default_factory=dict)  # or_passed under way
+    # (question, member): a question under way (or_passed; step_known, taking the step over)
+    asking: dict[tuple[str, str], asyncio.Task[None]] = field(default_factory=dict)
     owner: asyncio.Task[None] | None = None  # owns the step's tasks until it is decided
     owned: asyncio.Future[None] = field(default_factory=_owned)  # the owner's group is open
     tasks: asyncio.TaskGroup | None = None  # the owner's group (the step's questions)
     questions: int = 0  # or_passed calls sent from here (two messages each)
     gone: set[str] = field(default_factory=set)  # members lost during the step (on_gone)
+    said: set[str] = field(default_factory=set)  # asked step_known: know nothing, never join
