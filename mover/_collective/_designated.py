@@ -7,10 +7,9 @@ heard in another's announcement, or told to this node's own member in an answer.
 others ``or_passed`` (:class:`~._operations.Operations` answers it) and, taking a step over from
 a designated member that is gone, ``step_known``: the gone one may have decided the step and
 told some members before it died, and a decision once made is the one every member ends with,
-so a successor decides only once every live member has said what it knows (or that its run
-ended here), and adopts a decision one of them holds. Its questions run in a TaskGroup of the
-step's own, which ends, awaited, when the step is decided; the steps' groups belong to one
-TaskGroup of the node's. A member lost at any moment fails (policy ``fail``) every undecided
+so a successor decides only once every live member has said what it knows, and adopts a
+decision one of them holds. Its questions run in a TaskGroup of the step's own, which ends,
+awaited, when the step is decided; the steps' groups belong to one TaskGroup of the node's. A member lost at any moment fails (policy ``fail``) every undecided
 step it is a member of, served here already or later (it is remembered, while it stays gone).
 Protocol and costs: ``docs/collectives.md``. Memory: the last ``STEP_MEMORY`` steps and runs.
 """
@@ -18,6 +17,7 @@ Protocol and costs: ``docs/collectives.md``. Memory: the last ``STEP_MEMORY`` st
 from __future__ import annotations
 
 import asyncio
+import inspect
 import logging
 import math
 from collections.abc import Awaitable, Callable, Sequence
@@ -313,8 +313,8 @@ class Collectives:
         while True:
             try:
                 if member == self.node.name:
-                    ask = self.procedures[procedure]
-                    return await ask(state.run, state.step, *args)
+                    answer = self.procedures[procedure](state.run, state.step, *args)
+                    return await answer if inspect.isawaitable(answer) else answer
                 state.questions += 1
                 return await self.node.call(
                     member, procedure, state.run, state.step, *args, timeout=CALL_TIMEOUT
@@ -357,19 +357,17 @@ class Collectives:
         state.said.add(member)
         self._settle(state)
 
-    async def step_known(self, run: str, step: int) -> Any:
+    def step_known(self, run: str, step: int) -> Any:
         """A successor taking step ``(run, step)`` over asks what this node knows of it: its
-        decision once known here (as on the wire), or None once this node's member left the
-        run (it will never reach or join that step). A member in the step or before it answers
-        once it knows: it joins the successor meanwhile (its poll, claim or result)."""
-        state = self._record(run, step)
-        ended = self.operations.ended(run)
-        either: set[asyncio.Future[Any]] = {state.decision, ended}
-        await asyncio.wait(either, return_when=asyncio.FIRST_COMPLETED)
-        known = state.decision
-        if known.done() and not known.cancelled() and known.exception() is None:
-            return known.result().to_wire()
-        return None
+        decision if known here (as on the wire), else None, at once. A member that knows
+        nothing cannot learn the decision but from the successor (the member that made it is
+        gone): it joins the successor once it reaches the step, if it ever does (not if its run
+        ended here), and gets the successor's."""
+        state = self._steps.get((run, step))
+        known = None if state is None else state.decision
+        if known is None or not known.done() or known.cancelled() or known.exception():
+            return None
+        return known.result().to_wire()
 
     def _settle(self, state: Step) -> None:
         """Decide served step ``state`` if it can be, now."""

@@ -9,6 +9,8 @@ and after its run ended (answered "out"). Memory: the last ``STEP_MEMORY`` steps
 from __future__ import annotations
 
 import asyncio
+import contextlib
+from collections import deque
 from typing import Any
 
 from ._clock import TimedOp
@@ -20,8 +22,7 @@ class Operations:
 
     def __init__(self) -> None:
         self._local: dict[tuple[str, int], asyncio.Future[TimedOp | None]] = {}
-        # run -> done once it ended here (kept for the STEP_MEMORY latest runs asked or ended)
-        self._ends: dict[str, asyncio.Future[None]] = {}
+        self._ended: deque[str] = deque(maxlen=STEP_MEMORY)  # runs that ended here
 
     def _reaching(self, run: str, step: int) -> asyncio.Future[TimedOp | None]:
         future = self._local.get((run, step))
@@ -39,21 +40,10 @@ class Operations:
         if not future.done():
             future.set_result(local)
 
-    def ended(self, run: str) -> asyncio.Future[None]:
-        """Done once run ``run`` has ended here (read only): its member takes part in no
-        further step of it."""
-        future = self._ends.get(run)
-        if future is None:
-            future = self._ends[run] = asyncio.get_running_loop().create_future()
-            while len(self._ends) > STEP_MEMORY:  # the oldest that ended, else the oldest
-                old = next((r for r, f in self._ends.items() if f.done()), next(iter(self._ends)))
-                del self._ends[old]
-        return future
-
     def start_run(self, run: str) -> None:
         """A run named ``run`` starts here: forget an earlier run's operations of that name."""
-        if run in self._ends and self._ends[run].done():
-            del self._ends[run]  # that it ended (not a question already waiting for the new one)
+        with contextlib.suppress(ValueError):
+            self._ended.remove(run)
         for key in [k for k in self._local if k[0] == run]:
             future = self._local.pop(key)
             if not future.done():
@@ -61,9 +51,7 @@ class Operations:
 
     def end_run(self, run: str) -> None:
         """Run ``run`` ended here: questions about its steps are answered "out" from now on."""
-        ended = self.ended(run)
-        if not ended.done():
-            ended.set_result(None)
+        self._ended.append(run)
         for (r, _), future in list(self._local.items()):
             if r == run and not future.done():
                 future.set_result(None)
@@ -74,7 +62,7 @@ class Operations:
         claim is on its way), ``{"passed": now}`` once the clock passed ``t``, ``{"out": True}``
         if it will never claim (its operation failed, the run ended here, no clock); a member
         that has not reached the step yet answers once it has."""
-        if self.ended(run).done():
+        if run in self._ended:
             return {"out": True}
         local = await asyncio.shield(self._reaching(run, step))
         if local is None:

@@ -154,4 +154,4 @@ class Step:
     tasks: asyncio.TaskGroup | None = None  # the owner's group (the step's questions)
     questions: int = 0  # or_passed calls sent from here (two messages each)
     gone: set[str] = field(default_factory=set)  # members lost during the step (on_gone)
-    said: set[str] = field(default_factory=set)  # asked step_known: know nothing, never join
+    said: set[str] = field(default_factory=set)  # answered step_known: it knows nothing

@@ -66,9 +66,9 @@ async def test_a_successor_adopts_the_or_decision_a_member_moved_on_with(
 async def test_a_successor_whose_run_ended_still_decides_for_the_others(
     nodes: list[Node],
 ) -> None:
-    """n1's run has ended (it failed an earlier step, say); n0 dies while n2 waits in OR step
-    1. n2 asks n1, now the designated member, which counts its own member out (it will never
-    join) and decides: n2 ends with MemberLost (it used to wait for n1's member forever)."""
+    """n1's run has ended (it failed the step before, as b did in CI); n0 dies while n2 waits
+    in OR step 1. n2 asks n1, now the designated member, whose own member will never join: it
+    decides all the same, and n2 ends with MemberLost (it used to wait for n1's member)."""
     b = Collectives(nodes[1])
     c = RunTeam(nodes[2], RUN, ["n0", "n1", "n2"])
     b.end_run(RUN)
