@@ -9,9 +9,10 @@ a designated member that is gone, ``step_known``: the gone one may have decided 
 told some members before it died, and a decision once made is the one every member ends with,
 so a successor decides only once every live member has said what it knows, and adopts a
 decision one of them holds. Its questions run in a TaskGroup of the step's own, which ends,
-awaited, when the step is decided; the steps' groups belong to one TaskGroup of the node's. A member lost at any moment fails (policy ``fail``) every undecided
-step it is a member of, served here already or later (it is remembered, while it stays gone).
-Protocol and costs: ``docs/collectives.md``. Memory: the last ``STEP_MEMORY`` steps and runs.
+awaited, when the step is decided; the steps' groups belong to one TaskGroup of the node's.
+A member lost at any moment fails (policy ``fail``) every undecided step it is a member of,
+served here already or later (it is remembered, while it stays gone). Protocol and costs:
+``docs/collectives.md``. Memory: the last ``STEP_MEMORY`` steps and runs.
 """
 
 from __future__ import annotations
