@@ -92,13 +92,15 @@ CASES = [
     ("or", "after", "c", signal.SIGINT, HOLD),
     ("or", "deciding", "a", signal.SIGTERM, HOLD),
 ]
-UNDERSTOOD: dict[tuple[str, str, str, int, float], tuple[pytest.MarkDecorator, ...]]
-UNDERSTOOD = {case: () for case in CASES}
+# "or-deciding-a" once left c waiting under load (1 run in 30 beside two CPU hogs): a's answer
+# to b's begin was lost with a, b took step 0 over and failed it while c had gone on with a's
+# decision, and then waited for its own member (whose run had ended) in step 1. A successor now
+# adopts a decision a live member holds (tests/mover/test_step_takeover.py, issue 22).
 
 
 @pytest.mark.parametrize(
     ("kind", "phase", "victim", "sig", "hold"),
-    [pytest.param(*case, marks=UNDERSTOOD[case]) for case in CASES],
+    CASES,
     ids=[f"{k}-{p}-{v}-{signal.Signals(s).name}-{h:g}" for k, p, v, s, h in CASES],
 )
 async def test_a_member_killed_at_a_phase_boundary_ends_the_step_for_all(
