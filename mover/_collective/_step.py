@@ -152,6 +152,6 @@ class Step:
     owner: asyncio.Task[None] | None = None  # owns the step's tasks until it is decided
     owned: asyncio.Future[None] = field(default_factory=_owned)  # the owner's group is open
     tasks: asyncio.TaskGroup | None = None  # the owner's group (the step's questions)
-    questions: int = 0  # or_passed calls sent from here (two messages each)
+    questions: int = 0  # or_passed and step_known calls sent from here (two messages each)
     gone: set[str] = field(default_factory=set)  # members lost during the step (on_gone)
     said: set[str] = field(default_factory=set)  # answered step_known: it knows nothing
