@@ -251,6 +251,8 @@ class LockstepDoor(Generic[S]):
     async def aclose(self) -> None:
         """Stop the schedule, fail every pending call, end the tasks the door owns."""
         self.closed = True
+        if self.started:
+            gc.unfreeze()
         self.disarm()
         await self.schedule.aclose()
         for robot in [*self.stepper.robots(), *self.joins]:
@@ -333,7 +335,9 @@ class LockstepDoor(Generic[S]):
         What exists now (the world, its bodies, the robots' links) lives as long as the run:
         it is moved out of the garbage collector's sight (``gc.freeze``), so that the full
         collections a run's allocations trigger scan what a tick made, not the whole world
-        (at 200 robots in process they took a third of a tick: docs/physics.md).
+        (at 200 robots in process they took a third of a tick: docs/physics.md); :meth:`aclose`
+        hands it back (``gc.unfreeze``), so that a process running world after world frees
+        each.
         """
         self.started = True
         gc.freeze()
