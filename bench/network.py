@@ -32,6 +32,7 @@ import json
 import sys
 import tempfile
 import time
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -49,10 +50,12 @@ FAULT_FOR = 5.0
 
 
 async def scenario(
-    name: str, out: Path, seed: int, timeout: float, rtt_for: float
+    name: str, out: Path, seed: int, timeout: float, rtt_for: float, control_delay: int = 0
 ) -> dict[str, Any]:
     """Run one scenario; its figures."""
     plan = load_team(TEAM_FILE)
+    if control_delay and plan.world is not None:  # the world's control delay (sim_hw._delayed)
+        plan = replace(plan, world=replace(plan.world, control_delay=control_delay))
     t0 = time.monotonic()
     async with (
         Netlab(("a", "b", "c")) as lab,
@@ -135,7 +138,9 @@ async def main(args: argparse.Namespace) -> int:
     out = Path(args.out or tempfile.mkdtemp(prefix="mover-network-"))
     found: dict[str, dict[str, Any]] = {}
     for name in names:
-        figures = await scenario(name, out / name, args.seed, args.timeout, args.rtt_for)
+        figures = await scenario(
+            name, out / name, args.seed, args.timeout, args.rtt_for, args.control_delay
+        )
         found[name] = figures
         print(f"{name}: {json.dumps(figures)}", flush=True)
     print(json.dumps({"seed": args.seed, "out": str(out), **headline(found), "scenarios": found}))
@@ -146,6 +151,9 @@ if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--scenario", choices=("all", *SCENARIOS), default="all")
     parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument(
+        "--control-delay", type=int, default=0, help="the world's control delay in ticks"
+    )
     parser.add_argument("--out", help="folder for each run's logs and recording (default: a temp)")
     parser.add_argument("--timeout", type=float, default=120.0, help="seconds a run may take")
     parser.add_argument(

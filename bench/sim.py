@@ -2,7 +2,7 @@
 
     python bench/sim.py [--quick] [--no-procs] [--procs 10,50] [--other-topology]
 
-(a) the world alone: 10, 50, 200 in-process robots (8 sonar rays at 10 Hz, no camera, a
+(a) the world alone: 10, 50, 200, 1000 in-process robots (8 sonar rays at 10 Hz, no camera, a
 trivial bounce-off-walls controller) through the lock-step WorldServer and the in-process HAL;
 (b) 10 and 50 robot processes (``python -m sim_hw.continuous._walker``) driving a random walk
 through the remote HAL over zenoh on 127.0.0.1, the world hosted in this process, in the
@@ -18,7 +18,8 @@ network cost). The same 10 processes also run once with one call per tick instea
 ``--other-topology`` also runs each process figure in the other topology
 (``rtf_procs_N_other``, and ``topology_gain_N = rtf_procs_N / rtf_procs_N_other``).
 
-The last line is one JSON object: rtf_world_10, rtf_world_50, rtf_world_200, rtf_procs_10,
+The last line is one JSON object: rtf_world_10, rtf_world_50, rtf_world_200, rtf_world_1000,
+rtf_procs_10,
 rtf_procs_50, procs_topology_10, procs_topology_50, procs_efficiency_10, procs_efficiency_50,
 rtf_procs_10_calls, frames_speedup_10 (null where not measured), and with --other-topology
 rtf_procs_10_other, rtf_procs_50_other, topology_gain_10, topology_gain_50.
@@ -178,7 +179,7 @@ async def main(args: argparse.Namespace) -> dict[str, Any]:
     scale = 0.3 if args.quick else 1.0
     out: dict[str, Any] = {}
     world: dict[int, float] = {}
-    for n, seconds in ((10, 60.0), (50, 30.0), (200, 10.0)):
+    for n, seconds in ((10, 60.0), (50, 30.0), (200, 10.0), (1000, 5.0)):
         rtf = world[n] = await world_alone(n, seconds * scale)
         out[f"rtf_world_{n}"] = round(rtf, 1)
         print(f"world alone, {n:3d} robots: {rtf:7.1f}x real time", flush=True)

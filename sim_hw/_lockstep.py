@@ -32,7 +32,9 @@ one used, a later one or one for a tick already done is a retry (answered with t
 after that tick, never applied). **Real time** (``speed``): a tick every ``period / speed``
 wall seconds whoever has answered (a late robot keeps its last command). **Sequential turns**
 (``turns="sequential"``): a round in which robots that are not idle act one at a time in id
-order, each perceiving just before its own turn (Simonin et al., section 5.1).
+order, each perceiving just before its own turn (Simonin et al., section 5.1). **Lock-step with
+a control delay** (``control_delay=K``): a command handed in for tick t applies at tick t + K,
+so that the world runs up to K ticks ahead of its robots (``sim_hw._delayed``).
 
 Same seeds, world and commands: the same run, however long (in wall time) the world held
 still in between. Cost: one dict entry per robot per tick, a future per calling robot.
@@ -41,10 +43,12 @@ still in between. Cost: one dict entry per robot per tick, a future per calling 
 from __future__ import annotations
 
 import asyncio
+import gc
 import logging
 from collections.abc import Callable, Mapping
 from typing import Any, Generic, TypeVar
 
+from ._delayed import Delayed
 from ._schedules import Lockstep, RealTime, Schedule, Turns
 from ._types import Command, Readings, RobotDropped, Stepper, TurnStepper
 
@@ -74,7 +78,8 @@ class LockstepDoor(Generic[S]):
     ``expect`` robots must join before the first tick (0: start at the first join).
     ``timeout`` wall seconds after a tick's first command, a missing robot is logged, and
     dropped if ``drop_silent``. The schedule is lock-step, or real time with ``speed`` (a tick
-    of ``period`` simulated seconds), or ``turns="sequential"``; or one given as ``schedule``.
+    of ``period`` simulated seconds), or ``turns="sequential"``, or lock-step with a
+    ``control_delay`` of K ticks; or one given as ``schedule``.
     ``on_tick`` hooks (:data:`TickHook`) are called after every tick with the commands applied.
     """
 
@@ -89,12 +94,14 @@ class LockstepDoor(Generic[S]):
         period: float = 0.1,
         turns: str = "together",
         schedule: Schedule | None = None,
+        control_delay: int = 0,
     ) -> None:
         self.stepper = stepper
+        self.control_delay = control_delay
         self.expect = expect
         self.timeout = timeout
         self.drop_silent = drop_silent
-        self.schedule = schedule or _schedule(stepper, speed, period, turns)
+        self.schedule = schedule or _schedule(stepper, speed, period, turns, control_delay)
         self.dropped: list[str] = []
         self.on_tick: list[TickHook] = []
         self.started = expect <= 0
@@ -192,6 +199,7 @@ class LockstepDoor(Generic[S]):
         self._check(robot)
         if self.idles.pop(robot, None) is not None:
             log.debug("robot %s awake at %s %d", robot, self.stepper.words[1], self.stepper.tick)
+            self.schedule.woke(robot)
         return self.current(robot)
 
     async def watch(self, robot: str, on_readings: Callable[[Readings], None]) -> None:
@@ -243,6 +251,8 @@ class LockstepDoor(Generic[S]):
     async def aclose(self) -> None:
         """Stop the schedule, fail every pending call, end the tasks the door owns."""
         self.closed = True
+        if self.started:
+            gc.unfreeze()
         self.disarm()
         await self.schedule.aclose()
         for robot in [*self.stepper.robots(), *self.joins]:
@@ -320,8 +330,17 @@ class LockstepDoor(Generic[S]):
             hook(commands)
 
     def start(self) -> None:
-        """The expected robots are in: place them and answer their joins."""
+        """The expected robots are in: place them and answer their joins.
+
+        What exists now (the world, its bodies, the robots' links) lives as long as the run:
+        it is moved out of the garbage collector's sight (``gc.freeze``), so that the full
+        collections a run's allocations trigger scan what a tick made, not the whole world
+        (at 200 robots in process they took a third of a tick: docs/physics.md); :meth:`aclose`
+        hands it back (``gc.unfreeze``), so that a process running world after world frees
+        each.
+        """
         self.started = True
+        gc.freeze()
         self.stepper.start()
         early, self._early = self._early, {}
         self.resolve([*early.items(), *self.admit()])
@@ -341,6 +360,7 @@ class LockstepDoor(Generic[S]):
                 if not future.done():
                     future.set_exception(exc)
                 continue
+            self.schedule.placed(robot)
             admitted.append((robot, future))
         return admitted
 
@@ -424,9 +444,17 @@ class LockstepDoor(Generic[S]):
             seen(None)
 
 
-def _schedule(stepper: Stepper, speed: float | None, period: float, turns: str) -> Schedule:
+def _schedule(
+    stepper: Stepper, speed: float | None, period: float, turns: str, control_delay: int
+) -> Schedule:
     if speed is not None and not speed > 0:
         raise ValueError("speed must be positive")
+    if control_delay < 0:
+        raise ValueError(f"control delay must be 0 or more ticks, got {control_delay}")
+    if control_delay and (speed is not None or turns != "together"):
+        raise ValueError("a control delay is for lock-step worlds whose robots act together")
+    if control_delay:
+        return Delayed(control_delay)
     if turns not in ("together", "sequential"):
         raise ValueError(f"turns must be together or sequential, got {turns!r}")
     if turns == "sequential":

@@ -44,6 +44,10 @@ count = bounded(int, 0, MAX_COUNT)
 """An argparse type: a whole number from 0 to MAX_COUNT."""
 rate = bounded(float, 0.0, MAX_RATE)
 """An argparse type: a number from 0 to MAX_RATE."""
+MAX_DELAY = 100
+"""The most ticks of control delay a command line may ask for."""
+control_delay = bounded(int, 0, MAX_DELAY)
+"""An argparse type: a control delay in ticks, from 0 to MAX_DELAY."""
 
 
 def add_world_arguments(
@@ -166,17 +170,23 @@ class _TickFrames:
             return
         if done is not None and robot in self.pending:  # a retry for a tick already done
             del self.pending[robot]
-            self.send({robot: done})
+            if not self.door.control_delay:  # (else the tick's frame had every robot's entry)
+                self.send({robot: done})
 
     def flush(self, commands: Mapping[str, Command]) -> None:
         """The tick is done: one frame with the readings of every robot that asked by frame,
-        and of every idle robot (so that their readings stay current)."""
-        idle = self.door.idle_robots
-        if not self.pending and not idle:
+        and of every idle robot (so that their readings stay current); with a control delay,
+        of every robot."""
+        door = self.door
+        idle = door.idle_robots
+        if not self.pending and not idle and not door.control_delay:
             return
-        st = self.door.stepper
+        st = door.stepper
         robots = st.robots()
-        entries = {r: st.readings(r) for r in sorted({*self.pending, *idle}) if r in robots}
+        if door.control_delay:  # robots run behind the world: each finds its entry queued
+            entries = {r: st.readings(r) for r in sorted(robots)}
+        else:
+            entries = {r: st.readings(r) for r in sorted({*self.pending, *idle}) if r in robots}
         self.pending.clear()
         if entries:
             self.send(entries)

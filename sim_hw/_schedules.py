@@ -129,6 +129,12 @@ class Schedule:
         """``robot`` left the world: forget its command."""
         self.commands.pop(robot, None)
 
+    def placed(self, robot: str) -> None:
+        """``robot`` was placed in the world (nothing to do here)."""
+
+    def woke(self, robot: str) -> None:
+        """``robot`` is not idle any more (nothing to do here)."""
+
     async def aclose(self) -> None:
         """The door closes."""
 

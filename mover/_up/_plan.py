@@ -119,6 +119,8 @@ def world_argv(w: WorldPlan, s: Seeds, run_dir: Path) -> tuple[str, ...]:
             args += ["--record", str(run_dir / f"{w.name}.jsonl")]
         if w.state_rate is not None:
             args += ["--state-rate", f"{w.state_rate:g}"]
+        if w.control_delay:
+            args += ["--control-delay", str(w.control_delay)]
     else:
         if w.layout is not None:
             args += ["--layout", json.dumps(w.layout)]

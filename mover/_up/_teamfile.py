@@ -77,6 +77,7 @@ class WorldPlan:
     expect: int | None = None  # None: the robots of the file that join this world
     seed: int | None = None  # None: derived from the run seed
     required: bool = True
+    control_delay: int = 0  # lock-step: a command for tick t applies at t + K (sim_hw._delayed)
 
 
 @dataclass(frozen=True)
@@ -194,7 +195,7 @@ def _team(t: Table, path: Path) -> TeamPlan:
     )
 
 
-_CONTINUOUS = ("lockstep", "speed", "record", "state_rate")
+_CONTINUOUS = ("lockstep", "speed", "record", "state_rate", "control_delay")
 _GRID = ("layout", "turns")
 _COMMON = ("kind", "file", "name", "timeout", "until", "expect", "seed", "required")
 
@@ -227,6 +228,7 @@ def _world(t: Table, base: Path) -> WorldPlan:
         expect=t.option("expect", _EXPECT),
         seed=t.option("seed", _SEED),
         required=t.read("required", BOOLEAN, True),
+        control_delay=t.read("control_delay", integer(low=0, high=100), 0),
     )
 
 

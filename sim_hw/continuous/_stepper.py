@@ -101,7 +101,8 @@ class WorldServer:
     there; what runs after every tick (a recorder) is a hook on ``server.door.on_tick``.
     ``expect`` robots must join before a lock-step world starts (0: start at the first join);
     ``timeout`` wall seconds of silence in a tick drop a robot (in process; a world process
-    only says so, see ``sim_hw._lockstep``).
+    only says so, see ``sim_hw._lockstep``). ``control_delay`` (lock-step): a command handed
+    in for tick t applies at tick t + K (``sim_hw._delayed``).
     ``on_snapshot(snapshot)`` is called every ``snapshot_every`` ticks (0: never); it may be a
     coroutine function.
     """
@@ -116,6 +117,7 @@ class WorldServer:
         timeout: float = 2.0,
         snapshot_every: int = 0,
         on_snapshot: Callable[[Snapshot], Any] | None = None,
+        control_delay: int = 0,
     ) -> None:
         if speed <= 0:
             raise ValueError("speed must be positive")
@@ -126,6 +128,7 @@ class WorldServer:
             timeout=timeout,
             speed=None if lockstep else speed,
             period=TICK,
+            control_delay=control_delay,
         )
         self.snapshot_every = snapshot_every
         self.on_snapshot = on_snapshot

@@ -23,6 +23,7 @@ from robots.hal import MARK, MARKED
 
 from . import _bodies, _devices
 from ._contract import Command, Readings
+from ._sonar import Discs, Sonar, sonar_batch
 from ._spec import RobotSpec, WorldSpec
 
 _T = TypeVar("_T")
@@ -32,6 +33,8 @@ log = logging.getLogger("sim_hw.world")
 DT = 1.0 / 60.0
 STEPS_PER_TICK = 6
 TICK = DT * STEPS_PER_TICK
+BATCH_FROM = 64
+"""Robots from which a tick's sonar is read in one batch (``_sonar``; measured: docs/physics.md)."""
 PUSH_REACH = 0.1
 """How far ahead of its rim a robot looks for the object it is asked to push (m)."""
 
@@ -58,6 +61,7 @@ class _Robot:
     push: _Push | None = None
     readings: Readings = field(init=False)
     angles: tuple[float, ...] = ()
+    sonar: Sonar | None = None
 
 
 def _pose(body: pymunk.Body) -> tuple[float, float, float]:
@@ -110,6 +114,12 @@ class World:
         self.floor = _devices.Floor(spec.size[0], spec.size[1], spec.cell)
         for i, j, value, colour in spec.floor:
             self.floor.set(i, j, value, colour)
+        # what a sonar ray may hit besides robots (asked of chipmunk: see _sonar)
+        self._others = [
+            sh
+            for sh in space.shapes
+            if sh.filter.categories & _bodies.SOLID & ~_bodies.CAT_ROBOT and not sh.sensor
+        ]
 
     @property
     def time(self) -> float:
@@ -136,6 +146,9 @@ class World:
         start = (float(pose[0]), float(pose[1]), float(pose[2]))
         robot = _Robot(robot_id, group, parts, rng, list(pose), start, led=spec.led)
         robot.angles = spec.sonar.angles() if spec.sonar else ()
+        if spec.sonar:
+            sonar = spec.sonar
+            robot.sonar = Sonar(0, group, robot.angles, sonar.max_range, sonar.noise, rng)
         self.robots[robot_id] = robot
         self.entities[parts.shape] = _devices.Entity(
             "robot", robot_id, _center_of(parts.body), lambda: robot.led, parts.body
@@ -243,8 +256,32 @@ class World:
         self.tick += 1
         if self._markable:
             self._hear_marks(robots)
-        for robot in robots:
-            robot.readings = self._measure(robot)
+        self._measure_all(robots)
+
+    def _measure_all(self, robots: list[_Robot]) -> None:
+        """Every robot's readings after a tick: the sonar of all of them in one batch once
+        there are BATCH_FROM robots (below that, a query per ray is quicker; both read alike)."""
+        if len(robots) < BATCH_FROM:
+            for robot in robots:
+                robot.readings = self._measure(robot)
+            return
+        poses = [_pose(r.parts.body) for r in robots]
+        sonars: list[Sonar] = []
+        for i, (robot, pose) in enumerate(zip(robots, poses, strict=True)):
+            self._odometry(robot, pose)  # (its noise is drawn before the sonar's)
+            if robot.sonar is not None:
+                robot.sonar.index = i
+                sonars.append(robot.sonar)
+        discs = Discs(
+            np.array([p[0] for p in poses]),
+            np.array([p[1] for p in poses]),
+            np.array([p[2] for p in poses]),
+            np.array([r.parts.spec.radius for r in robots]),
+            np.array([r.group for r in robots]),
+        )
+        ranges = iter(sonar_batch(self.space, discs, sonars, self._others))
+        for robot, pose in zip(robots, poses, strict=True):
+            robot.readings = self._readings(robot, pose, next(ranges) if robot.sonar else None)
 
     def _hear_marks(self, robots: list[_Robot]) -> None:
         """Markable markers take the ``mark:<id>`` LED messages of robots within ``hears``."""
@@ -258,16 +295,18 @@ class World:
             if math.hypot(x - mk.center[0], y - mk.center[1]) <= mk.hears:
                 self.marked[mk.id] = self.time
 
-    def _measure(self, robot: _Robot) -> Readings:
-        parts = robot.parts
-        spec = parts.spec
-        body = parts.body
-        pose = _pose(body)
-        od = spec.odometry
+    def _odometry(self, robot: _Robot, pose: tuple[float, float, float]) -> None:
+        od = robot.parts.spec.odometry
         _devices.odometry_step(
             robot.odom, robot.last, pose, od.trans_noise, od.rot_noise, od.drift, robot.rng
         )
         robot.last = pose
+
+    def _measure(self, robot: _Robot) -> Readings:
+        """One robot's readings now (a robot just placed), its sonar a query per ray."""
+        spec = robot.parts.spec
+        pose = _pose(robot.parts.body)
+        self._odometry(robot, pose)
         sonar = spec.sonar
         ranges = (
             _devices.sonar_ranges(
@@ -283,6 +322,12 @@ class World:
             if sonar
             else None
         )
+        return self._readings(robot, pose, ranges)
+
+    def _readings(
+        self, robot: _Robot, pose: tuple[float, float, float], ranges: list[float] | None
+    ) -> Readings:
+        spec = robot.parts.spec
         cam = spec.camera
         sightings = (
             _devices.camera_sightings(
@@ -301,7 +346,7 @@ class World:
             "tick": self.tick,
             "t": self.time,
             "sonar": ranges,
-            "bump": _devices.bumper_side(body),
+            "bump": _devices.bumper_side(robot.parts.body),
             "odom": list(robot.odom),
             "cam": sightings,
             "loc": list(pose) if spec.radio else None,

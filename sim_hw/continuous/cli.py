@@ -1,9 +1,9 @@
 """The ``mover world`` and ``mover replay`` verbs (entry points of the ``mover`` command).
 
-``mover world WORLDFILE [--lockstep] [--speed X] [--seed N] [--record FILE]`` runs the world
-process: it joins the team from the environment (``MOVER_*``), exports ``join``/``step``/``leave``
-and streams snapshots on ``world/state``. ``mover replay FILE`` plays a recording in the web viewer
-(``sim_hw.view``); ``mover replay FILE --out PNG`` draws it.
+``mover world WORLDFILE [--lockstep [--control-delay K]] [--speed X] [--seed N] [--record FILE]``
+runs the world process: it joins the team from the environment (``MOVER_*``), exports
+``join``/``step``/``leave`` and streams snapshots on ``world/state``. ``mover replay FILE``
+plays a recording in the web viewer (``sim_hw.view``); ``mover replay FILE --out PNG`` draws it.
 """
 
 from __future__ import annotations
@@ -12,12 +12,13 @@ import argparse
 import asyncio
 import logging
 import math
+import os
 from pathlib import Path
 from typing import Any
 
 from mover import NameTaken
 from mover.cli import UsageError, positive
-from sim_hw._process import add_world_arguments, rate, ready_line
+from sim_hw._process import add_world_arguments, control_delay, rate, ready_line
 
 log = logging.getLogger("sim_hw.continuous.cli")
 
@@ -45,6 +46,15 @@ def register_world(sub: Any) -> None:
         default=2.0,
         metavar="HZ",
         help="snapshots per simulated second on world/state (0: none)",
+    )
+    p.add_argument(
+        "--control-delay",
+        type=control_delay,
+        default=os.environ.get("MOVER_CONTROL_DELAY", "0"),
+        metavar="K",
+        help="lock-step: a command handed in for tick t applies at tick t + K, so that the "
+        "world runs up to K ticks ahead of the network's round trip (default "
+        "$MOVER_CONTROL_DELAY, else 0)",
     )
     add_world_arguments(p, name="world", timeout=2.0, tick="tick", seed="the sensor noise")
     p.set_defaults(func=run_world)
@@ -81,6 +91,7 @@ def run_world(args: argparse.Namespace) -> int:
         expect=args.expect,
         timeout=args.timeout,
         snapshot_every=max(every, 1) if every else 0,
+        control_delay=args.control_delay if args.lockstep else 0,
     )
     if recorder is not None:
         server.door.on_tick.append(recorder)

@@ -80,6 +80,13 @@ def test_a_good_file_plans_its_processes(tmp_path: Path) -> None:
     assert procs[5].argv[-6:] == ("--name", "desk", "--kind", "workstation", "--hardware", "none")
 
 
+def test_a_world_takes_a_control_delay(tmp_path: Path) -> None:
+    plan = parse_team(GOOD.replace("timeout = 5", "control_delay = 2"), tmp_path / "team.toml")
+    assert plan.world is not None and plan.world.control_delay == 2
+    world = processes(plan, seeds(plan), tmp_path, port=7000)[0].argv
+    assert world[-5:] == ("--lockstep", "--control-delay", "2", "--expect", "4")
+
+
 def test_a_large_team_gets_a_router_and_a_file_may_choose(tmp_path: Path) -> None:
     assert not needs_router(PEER_MESH_MAX) and needs_router(PEER_MESH_MAX + 1)
     big = '[team]\nname = "big"\n[[workstations]]\nprefix = "w"\ncount = 12\n'

@@ -13,19 +13,22 @@ from typing import Any
 
 from mover import Node, NodeConfig, TeamCredentials
 from mover._config import free_port
-from sim_hw import World, WorldServer, random_obstacles, remote
+from sim_hw import World, WorldServer, in_process, random_obstacles, remote
 from sim_hw._frames import topics as frame_topics
 from sim_hw._process import serve
 
 
 @contextlib.asynccontextmanager
-async def _team(expect: int, *names: str, frames: bool = True) -> AsyncIterator[list[Any]]:
+async def _team(
+    expect: int, *names: str, frames: bool = True, control_delay: int = 0
+) -> AsyncIterator[list[Any]]:
     """A world node serving a fresh lock-step world, and member nodes ``names``, all joined."""
     port = free_port()
     seed = NodeConfig(listen=(f"tcp/127.0.0.1:{port}",))
     peer = NodeConfig(connect=(f"tcp/127.0.0.1:{port}",))
     team = TeamCredentials.generate("frames")
-    server = WorldServer(World(random_obstacles((6.0, 6.0), 0)), expect=expect)
+    arena = World(random_obstacles((6.0, 6.0), 0))
+    server = WorldServer(arena, expect=expect, control_delay=control_delay)
     async with contextlib.AsyncExitStack() as stack:
         world = await stack.enter_async_context(Node("world", team, kind="world", config=seed))
         nodes = [await stack.enter_async_context(Node(n, team, config=peer)) for n in names]
@@ -52,6 +55,36 @@ async def test_ticks_go_as_frames_after_the_first() -> None:
         assert a.stats["sent.call"] == 2 and b.stats["sent.call"] == 2
         assert world.stats["recv.bc"] == 38
         assert world.stats["sent.bc_frames"] == 19  # one frame of readings per tick, for both
+
+
+async def _steer(hw: Any, n: int) -> list[float]:
+    """Drive by the sonar for ``n`` ticks (what a robot does depends on what it read)."""
+    out = []
+    for _ in range(n):
+        near = min(hw.sonar.ranges())
+        hw.drive.set_velocity(0.4 if near > 0.5 else 0.0, 0.0 if near > 0.5 else 1.0)
+        await hw.clock.tick()
+        out.append(round(hw.clock.now() / 0.1))
+    return out
+
+
+async def test_with_a_control_delay_robots_read_every_tick_from_frames_the_world_ahead() -> None:
+    seen: list[Any] = []
+    async with _team(2, "a", "b", control_delay=2) as (server, _, a, b):
+        server.door.on_tick.append(lambda _: seen.append(server.world.snapshot()))
+        ha, hb = await asyncio.gather(remote(a, "a"), remote(b, "b"))
+        ticks = await asyncio.wait_for(asyncio.gather(_steer(ha, 30), _steer(hb, 30)), 30)
+        assert ticks[0] == ticks[1] == list(range(1, 31))  # every tick's readings, in order
+        assert a.stats["sent.call"] == 2 and b.stats["sent.call"] == 2  # no frame was missing
+        assert 30 <= server.world.tick <= 32  # up to two ticks ahead (32 once C(29) is in)
+    # the same run in one process: the same world, tick by tick
+    here = WorldServer(World(random_obstacles((6.0, 6.0), 0)), expect=2, control_delay=2)
+    again: list[Any] = []
+    here.door.on_tick.append(lambda _: again.append(here.world.snapshot()))
+    ia, ib = await asyncio.gather(in_process(here, "a"), in_process(here, "b"))
+    await asyncio.wait_for(asyncio.gather(_steer(ia, 30), _steer(ib, 30)), 30)
+    await here.door.aclose()
+    assert len(again) == 32 and again[: len(seen)] == seen
 
 
 async def test_a_command_frame_only_counts_from_its_robot() -> None:

@@ -1,0 +1,149 @@
+"""Lock-step with a control delay of K ticks: a command handed in for tick t applies at tick t + K.
+
+Like a real robot's sense-to-act latency, and what lets a lock-step world run ahead of the
+network's round trip: the world runs tick T once every robot it waits for has handed in its
+command for tick T - K (ticks before K apply none), so it is up to K ticks ahead of the
+robots, and a robot that hands in its command for tick t gets the readings after tick t at
+once if the world is there already (the world keeps the last K + 1 ticks' readings). With
+frames, each tick's frame carries every robot's entry, so that a robot finds the readings it
+waits for in its queue. One round trip then carries K + 1 ticks instead of one.
+
+Deterministic as lock-step is: the commands applied at a tick are those handed in for one
+tick, in id order, whatever the wall clock did; a robot waits for the readings after its own
+tick, never later ones. The world waits for a robot's commands from the tick it joined or
+woke at (the ticks before apply its standing command: stopped, if it was idle).
+
+Cost: the readings of K + 1 ticks (references to what the world built anyway) and a dict of
+commands a tick.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+from collections import deque
+
+from ._schedules import Schedule
+from ._types import Command, Readings
+
+log = logging.getLogger("sim_hw.lockstep")
+
+
+class Delayed(Schedule):
+    """Lock-step whose commands apply ``k`` ticks after the tick they were handed in for."""
+
+    def __init__(self, k: int) -> None:
+        super().__init__()
+        if k < 1:
+            raise ValueError(f"a control delay is a whole number of ticks from 1, got {k}")
+        self.k = k
+        self.queue: dict[int, dict[str, Command]] = {}  # tick -> robot -> its command
+        self.since: dict[str, int] = {}  # robot -> the first tick whose command is waited for
+        # (tick, {robot: readings after it}), the last k + 1 ticks
+        self.history: deque[tuple[int, dict[str, Readings]]] = deque(maxlen=k + 1)
+
+    def take(self, robot: str, tick: int, command: Command) -> bool:
+        """Keep ``robot``'s command for ``tick`` unless it is too late to apply; the first
+        command for a tick stands. False if the world is past ``tick`` (the caller is answered
+        from the readings kept)."""
+        now: int = self.door.stepper.tick
+        if tick >= now - self.k:  # it may still apply
+            self.queue.setdefault(tick, {}).setdefault(robot, dict(command))
+        return tick >= now
+
+    def submit(self, robot: str, tick: int, command: Command) -> asyncio.Future[Readings]:
+        """Hand in a command; the future gets the readings after ``tick`` (at once if the
+        world is past it)."""
+        if not self.take(robot, tick, command):
+            done: asyncio.Future[Readings] = asyncio.get_running_loop().create_future()
+            done.set_result(self.after(robot, tick))
+            self.taken()
+            return done
+        waiter = self.door.waiter(robot)
+        self.taken()
+        return waiter
+
+    def hand_in(self, robot: str, tick: int, command: Command) -> Readings | None:
+        """Hand in a command no one waits on: the readings after ``tick`` if the world is past
+        it, else None."""
+        done = None if self.take(robot, tick, command) else self.after(robot, tick)
+        self.taken()
+        return done
+
+    def after(self, robot: str, tick: int) -> Readings:
+        """``robot``'s readings after ``tick`` (those of now if they are no longer kept: a
+        retry of long ago)."""
+        for done, readings in self.history:
+            if done == tick + 1 and robot in readings:
+                return readings[robot]
+        return self.door.stepper.readings(robot)
+
+    def taken(self) -> None:
+        """Tick for as long as the commands are in; time the robots missing."""
+        self.pump()
+        if self.door.started:
+            self.door.arm()
+
+    def pump(self) -> None:
+        """Run every tick whose commands are in (ticks before k apply none); with no robot to
+        wait for, place the robots waiting to join."""
+        door = self.door
+        if not door.started:
+            return
+        st = door.stepper
+        while not door.closed:
+            waited = len(st.robots()) - len(door.idles)
+            if waited <= 0:
+                break
+            need = st.tick - self.k
+            if need >= 0:
+                got = self.queue.get(need, {})
+                # counting first: the scan runs once a tick, not once a command
+                if len(got) < waited - self._late(need) or self._missing():
+                    break
+            door.run_tick(self.queue.pop(need, {}))
+            self.history.append((st.tick, {r: st.readings(r) for r in st.robots()}))
+            self.since = {r: t for r, t in self.since.items() if t > need}
+        if door.joins and not door.busy():
+            door.admit_now()
+
+    def placed(self, robot: str) -> None:
+        """``robot`` was placed: its commands are waited for from the tick of its first
+        readings."""
+        self.since[robot] = self.door.stepper.tick
+
+    def woke(self, robot: str) -> None:
+        """``robot`` is awake again: its commands are waited for from now on."""
+        self.since[robot] = self.door.stepper.tick
+
+    def started(self) -> None:
+        """The world started: run the ticks that apply no command yet."""
+        self.pump()
+
+    def expire(self) -> None:
+        """The timeout passed with robots missing: tell of (or drop) each, then go on."""
+        door = self.door
+        for robot in self._missing():
+            door.silent(robot, f"sent no {door.stepper.words[0]} for")
+        self.pump()
+
+    def removed(self, robot: str) -> None:
+        """``robot`` left the world: forget its commands."""
+        self.since.pop(robot, None)
+        for commands in self.queue.values():
+            commands.pop(robot, None)
+
+    def _late(self, need: int) -> int:
+        """How many robots the world does not wait for at tick ``need`` though they are not
+        idle (they joined or woke after it)."""
+        idles = self.door.idles
+        return sum(1 for r, t in self.since.items() if t > need and r not in idles)
+
+    def _missing(self) -> list[str]:
+        """The robots whose command for the tick the world would run next is not in."""
+        door = self.door
+        need = door.stepper.tick - self.k
+        if need < 0:
+            return []
+        got = self.queue.get(need, {})
+        return [r for r in door.busy() if r not in got and self.since.get(r, need) <= need]

@@ -1,0 +1,80 @@
+"""A control delay of K ticks: a command for tick t applies at tick t + K, the world runs up to K
+ticks ahead of its robots, and a seeded run is the same whatever the scheduling."""
+
+from __future__ import annotations
+
+import asyncio
+import random
+from typing import Any
+
+import pytest
+
+from sim_hw import RobotSpec, SonarSpec, World, WorldServer, WorldSpec, in_process
+from sim_hw._delayed import Delayed
+
+TICKS = 40
+
+
+async def _run(k: int, shuffle: int | None) -> tuple[list[Any], int]:
+    """Three robots bouncing off each other and the walls for TICKS ticks; with ``shuffle``,
+    each robot yields a random number of times before every tick (another scheduling).
+    Returns the snapshot after every tick and how far the world ran ahead at most."""
+    world = World(WorldSpec(size=(4.0, 4.0), name="delay"), seed=3)
+    server = WorldServer(world, expect=3, control_delay=k)
+    snapshots: list[Any] = []
+    server.door.on_tick.append(lambda _: snapshots.append(world.snapshot()))
+    ahead = 0
+    pick = random.Random(shuffle)
+
+    async def robot(i: int) -> None:
+        nonlocal ahead
+        spec = {"pose": [1.0 + i, 1.0 + 0.5 * i, 0.3 * i], "sonar": {"rays": 4}}
+        hw = await in_process(server, f"r{i}", spec)
+        assert hw.sonar is not None
+        for _ in range(TICKS):
+            for _ in range(pick.randrange(4) if shuffle is not None else 0):
+                await asyncio.sleep(0)
+            near = min(hw.sonar.ranges())
+            hw.drive.set_velocity(0.5 if near > 0.4 else -0.2, 0.0 if near > 0.4 else 1.5)
+            await hw.clock.tick()
+            mine = round(hw.clock.now() / 0.1)
+            ahead = max(ahead, world.tick - mine)
+
+    await asyncio.wait_for(asyncio.gather(*(robot(i) for i in range(3))), 30)
+    await server.door.aclose()
+    return snapshots, ahead
+
+
+@pytest.mark.parametrize("k", [1, 3])
+async def test_a_delayed_run_is_the_same_whatever_the_scheduling(k: int) -> None:
+    first, ahead = await _run(k, None)
+    for seed in (1, 2):
+        again, _ = await _run(k, seed)
+        assert again == first
+    assert ahead == k  # the world ran ahead of its robots, by K ticks at most
+    undelayed, _ = await _run(0, None)
+    assert undelayed[: TICKS - k] != first[: TICKS - k]  # the delay changed the run
+
+
+async def test_a_command_applies_k_ticks_later() -> None:
+    world = World(WorldSpec(size=(4.0, 4.0), name="delay"), seed=1)
+    server = WorldServer(world, expect=1, control_delay=2)
+    spec = RobotSpec(pose=(1.0, 1.0, 0.0), sonar=SonarSpec(rays=4))
+    hw = await in_process(server, "r", {"pose": list(spec.pose or ()), "sonar": {"rays": 4}})
+    xs = []
+    hw.drive.set_velocity(0.5, 0.0)  # handed in for tick 0: applies at tick 2
+    for _ in range(4):
+        await hw.clock.tick()
+        xs.append(hw.odometry.pose()[0])
+        hw.drive.set_velocity(0.5, 0.0)
+    await server.door.aclose()
+    assert xs[0] == xs[1] == 1.0  # ticks 0 and 1 applied no command
+    assert xs[2] > 1.0 and xs[3] > xs[2]
+
+
+def test_a_delay_is_for_lock_step_worlds_whose_robots_act_together() -> None:
+    world = World(WorldSpec(size=(4.0, 4.0), name="delay"))
+    with pytest.raises(ValueError, match="lock-step"):
+        WorldServer(world, lockstep=False, control_delay=2)
+    with pytest.raises(ValueError, match="whole number"):
+        Delayed(0)
