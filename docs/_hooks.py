@@ -3,6 +3,8 @@
 * Every public name has a docstring: each module of ``PUBLIC``, each name of its ``__all__``,
   and each public method or property a class of it defines. mkdocstrings renders a name without
   a docstring as an empty entry; here the build fails instead, naming every one that lacks it.
+* The docstrings' Sphinx roles (``:class:`Node```, ``:func:`~mover.launch```), which
+  mkdocstrings leaves as text, are shown as the code they name.
 * The CLI page (``reference/cli.md``) gets every verb's usage from the ``mover`` command's own
   parser, at the ``<!-- mover verbs -->`` mark: a verb added to the command is on the page
   without anyone writing it there, and one whose entry point does not load fails the build.
@@ -16,6 +18,7 @@ import argparse
 import importlib
 import inspect
 import os
+import re
 from collections.abc import Iterable
 from importlib.metadata import entry_points
 from typing import Any
@@ -38,6 +41,7 @@ PUBLIC = (
 """The modules of the public API: the reference pages draw these."""
 
 VERBS_MARK = "<!-- mover verbs -->"
+ROLE = re.compile(r":(?:py:)?(?:class|func|meth|data|attr|mod|exc|obj):<code>~?")
 
 
 def _own_members(cls: type) -> Iterable[tuple[str, Any]]:
@@ -73,7 +77,7 @@ def undocumented(modules: Iterable[str] = PUBLIC) -> list[str]:
 
 def verbs_markdown() -> str:
     """Every verb of the ``mover`` command, its ``--help`` in a text block, sorted by name."""
-    from mover.cli._main import build_parser  # noqa: PLC0415 - the command, when asked for
+    from mover.cli._main import build_parser  # the command, when asked for
 
     names = sorted(ep.name for ep in entry_points(group="mover.commands"))
     old = os.environ.get("COLUMNS")
@@ -101,7 +105,7 @@ def on_config(config: Any) -> Any:
     """Fail the build when a public name has no docstring."""
     missing = undocumented()
     if missing:
-        from mkdocs.exceptions import PluginError  # noqa: PLC0415 - only inside mkdocs
+        from mkdocs.exceptions import PluginError  # only inside mkdocs
 
         raise PluginError("public names without a docstring: " + ", ".join(missing))
     return config
@@ -112,3 +116,8 @@ def on_page_markdown(markdown: str, page: Any, **_: Any) -> str:
     if VERBS_MARK in markdown:
         return markdown.replace(VERBS_MARK, verbs_markdown())
     return markdown
+
+
+def on_page_content(html: str, **_: Any) -> str:
+    """Show a Sphinx role of a docstring as the code it names."""
+    return ROLE.sub("<code>", html)

@@ -5,7 +5,8 @@ robot (as ``mover run`` would: nothing is shipped) and sends it a command per ke
 team-wide topic ``teleop/<robot>``: ``[v, w]`` or ``"quit"``. The robot stops by itself when
 no key came for the program's ``hold`` (half a second), so holding a key drives and letting go
 stops. On a terminal the keys are read one by one (cbreak mode, restored on the way out); from
-a pipe, each character of each line is a key, so a script or a test can drive too.
+a pipe, each character of each line is a key, replayed at ``REPEAT`` keys a second as a held
+key repeats on a terminal, so a script or a test can drive too.
 
 Keys: ``w``/up forward, ``s``/down back, ``a``/left turn left, ``d``/right turn right, space
 or ``x`` stop, ``q`` quit (and Ctrl-C, which also cancels the run). The program's outcome,
@@ -41,6 +42,7 @@ TOPIC = "teleop"
 ARROWS = {"\x1b[A": "w", "\x1b[B": "s", "\x1b[D": "a", "\x1b[C": "d"}
 KEYS = {"w": (1.0, 0.0), "s": (-1.0, 0.0), "a": (0.0, 1.0), "d": (0.0, -1.0), " ": (0.0, 0.0)}
 """Each key's command as fractions of (speed, turn rate); ``x`` is space (stop)."""
+REPEAT = 20.0  # keys per second read from a pipe (a terminal's key repeat is 20-30)
 HELP = "w/up forward, s/down back, a/left and d/right turn, space or x stop, q quit"
 
 
@@ -61,7 +63,7 @@ def register(sub: Sub) -> None:
         description="Start the `teleop` program on ROBOT and drive it with the keys: "
         + HELP
         + ". Holding a key drives; the robot stops half a second after the last key. Read"
-        " from a pipe, each character of each line is a key. Not while the robot is in"
+        " from a pipe, each character of each line is a key, 20 a second. Not while the robot is in"
         " another run (it refuses).",
     )
     p.add_argument("robot", type=member_name, help="the robot to drive")
@@ -133,9 +135,11 @@ def _print_outcome(robot: str, outcome: dict[str, Any]) -> int:
 
 
 async def _keys() -> AsyncIterator[str]:
-    """Keys from standard input: one by one on a terminal, else the characters of each line."""
+    """Keys from standard input: one by one on a terminal, else the characters of each line
+    at ``REPEAT`` a second."""
     loop = asyncio.get_running_loop()
     fd = sys.stdin.fileno()
+    piped = not os.isatty(fd)
     queue: asyncio.Queue[str] = asyncio.Queue()
 
     def readable() -> None:
@@ -148,6 +152,8 @@ async def _keys() -> AsyncIterator[str]:
             while chunk := await queue.get():
                 for key in _split(chunk):
                     yield key
+                    if piped:
+                        await asyncio.sleep(1.0 / REPEAT)
         finally:
             loop.remove_reader(fd)
 
