@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING, Any
 
 from .._config import NodeConfig, TeamCredentials
 from .._exceptions import CallError, MoverError
-from .._programs import launch, outcomes
+from .._programs import PROGRESS_TOPIC, launch, outcomes
 from . import add_team_arguments, bounded, member_name, team_from_args
 
 if TYPE_CHECKING:
@@ -42,6 +42,7 @@ TOPIC = "teleop"
 ARROWS = {"\x1b[A": "w", "\x1b[B": "s", "\x1b[D": "a", "\x1b[C": "d"}
 KEYS = {"w": (1.0, 0.0), "s": (-1.0, 0.0), "a": (0.0, 1.0), "d": (0.0, -1.0), " ": (0.0, 0.0)}
 """Each key's command as fractions of (speed, turn rate); ``x`` is space (stop)."""
+READY_TIMEOUT = 10.0  # seconds for the program to say it listens (it reports "driving")
 REPEAT = 20.0  # keys per second read from a pipe (a terminal's key repeat is 20-30)
 HELP = "w/up forward, s/down back, a/left and d/right turn, space or x stop, q quit"
 
@@ -101,11 +102,22 @@ async def _drive(
         except TimeoutError:
             print(f"mover drive: {robot!r} is not in team {team.name!r}", file=sys.stderr)
             return 1
+        progress = node.subscribe(f"{PROGRESS_TOPIC}/{run}")
         try:
             await launch(node, PROGRAM, [robot], {"topic": TOPIC}, run=run, wait=False)
+            async with asyncio.timeout(READY_TIMEOUT):  # keys sent before it listens are lost
+                async for report in progress:
+                    if isinstance(report.data, dict) and report.data.get("phase") == "driving":
+                        break
         except CallError as exc:
             print(f"mover drive: {robot} did not start {PROGRAM}: {exc}", file=sys.stderr)
             return 1
+        except TimeoutError:
+            print(f"mover drive: {PROGRAM} on {robot} did not start listening", file=sys.stderr)
+            await node.call(robot, "mover.cancel", run, timeout=5.0)
+            return 1
+        finally:
+            progress.close()
         print(f"mover drive: driving {robot} ({HELP})", file=sys.stderr)
         ended = False
         try:
