@@ -1,6 +1,7 @@
 # Each target sets itself up: a fresh machine needs only python3 (3.11+) and make.
 #   make check     ruff, the format check, mypy and the quick tests (minutes): before a commit
 #   make test      the same checks and every test (what CI runs, through .ci/run)
+#   make docs      the documentation site in site/ (strict: a warning fails it)
 #   make coverage  the tests under coverage, processes they start included (TESTS= narrows)
 VENV ?= .venv
 PY := $(VENV)/bin/python
@@ -11,7 +12,7 @@ CODE := mover robots sim_hw programs experiments tests bench examples
 QUICK := -m "not slow and not processes"
 TESTS ?=
 
-.PHONY: demo lint check test coverage bench clean
+.PHONY: demo lint check test coverage bench docs clean
 
 $(STAMP): pyproject.toml
 	python3 -m venv $(VENV)
@@ -39,8 +40,11 @@ coverage: $(STAMP)
 	$(PY) -m coverage combine -q
 	$(PY) -m coverage report
 
+docs: $(STAMP)
+	$(VENV)/bin/mkdocs build --strict
+
 bench: $(STAMP)
 	$(PY) bench/rpc.py
 
 clean:
-	rm -rf $(VENV) build *.egg-info .coverage .coverage.* htmlcov
+	rm -rf $(VENV) build site *.egg-info .coverage .coverage.* htmlcov

@@ -184,6 +184,7 @@ class Membership:
             queue.put_nowait(event)
 
     def self_info(self) -> MemberInfo:
+        """What this node's own liveliness token says of it (name, kind, start, pid, host)."""
         state = self._state
         return MemberInfo(state.name, state.kind, state.started, os.getpid(), os.uname().nodename)
 

@@ -41,7 +41,9 @@ if TYPE_CHECKING:
 class Locator(Protocol):
     """Where this robot is: ``(x, y, heading)`` in metres and radians, or None if unknown."""
 
-    def position(self) -> tuple[float, float, float] | None: ...
+    def position(self) -> tuple[float, float, float] | None:
+        """This robot's ``(x, y, heading)`` now, or None while it is not known."""
+        ...
 
 
 @dataclass
@@ -53,6 +55,7 @@ class FixedLocator:
     heading: float = 0.0
 
     def position(self) -> tuple[float, float, float] | None:
+        """The fixed ``(x, y, heading)``."""
         return (self.x, self.y, self.heading)
 
 
