@@ -66,25 +66,8 @@ async def scenario(
             timeout = rtt_for
         elif name == "loss10":
             proxy.up = proxy.down = Impairment(0.05, 0.02, loss=0.1)
-        run = asyncio.create_task(team.run_program(timeout=timeout))
-        fault = ""
-        if name in ("partition", "stall"):
-            started = asyncio.create_task(team.run_started.wait())
-            await asyncio.wait({run, started}, timeout=60, return_when="FIRST_COMPLETED")
-            started.cancel()
-            if team.run_started.is_set() and not run.done():
-                await asyncio.sleep(FAULT_AT)
-                if name == "partition":
-                    async with lab.partition("b", FAULT_FOR):
-                        pass
-                else:
-                    team.stall_router(True)
-                    try:
-                        await asyncio.sleep(FAULT_FOR)
-                    finally:
-                        team.stall_router(False)
-                fault = f"{name} {FAULT_FOR:g} s at +{FAULT_AT:g} s"
-        result = await run
+        fault = name if name in ("partition", "stall") else None
+        result = await team.run_with_fault(fault, at=FAULT_AT, seconds=FAULT_FOR, timeout=timeout)
         # read before the team stops (a stop makes members leave, and the world says so)
         figures: dict[str, Any] = {
             "code": result.code,
@@ -98,8 +81,11 @@ async def scenario(
     sim = last_tick(team.recording)
     figures["sim_s"] = None if sim is None else round(sim, 2)
     figures["tracebacks"] = team.tracebacks()
-    if fault:
-        figures["fault"] = fault
+    if result.fault:
+        figures["fault"] = result.fault
+    waits = [line for _, line in result.lines if "waiting for" in line or "answering again" in line]
+    if waits:
+        figures["waited"] = waits[:4]
     failed = [line for _, line in result.lines if "FAILED" in line or "mover run:" in line]
     figures["said"] = failed[:4]
     return figures
