@@ -1,7 +1,7 @@
 """Search and rescue across hosts, on a clean and a bad network (issue 23's figures).
 
     sudo python bench/network.py [--scenario all|clean|rtt100|partition|stall|loss10]
-                                 [--seed 1] [--out DIR] [--timeout 120]
+                                 [--seed 1] [--out DIR] [--timeout 120] [--patience S]
 
 Builds three hosts (network namespaces, :mod:`mover._netlab`): a runs ``mover router`` (mutual
 TLS and the ACL of ``mover router --gen-config``) and the lock-step world, b the three robots,
@@ -32,9 +32,11 @@ import json
 import sys
 import tempfile
 import time
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+from mover._config import NodeConfig
 from mover._impair import Impairment
 from mover._netlab import Netlab, unavailable
 from mover._netteam import TeamAcrossHosts, last_tick, losses, lost_members
@@ -49,10 +51,12 @@ FAULT_FOR = 5.0
 
 
 async def scenario(
-    name: str, out: Path, seed: int, timeout: float, rtt_for: float
+    name: str, out: Path, seed: int, timeout: float, rtt_for: float, patience: float | None
 ) -> dict[str, Any]:
     """Run one scenario; its figures."""
     plan = load_team(TEAM_FILE)
+    if patience is not None:
+        plan = replace(plan, patience=patience)
     t0 = time.monotonic()
     async with (
         Netlab(("a", "b", "c")) as lab,
@@ -75,7 +79,12 @@ async def scenario(
             "run_s": None if result.run_s is None else round(result.run_s, 1),
             "losses": losses(result, team),
             "lost_members": sorted(lost_members(result, team)),
-            "proxy": {"connections": proxy.stats.connections, "lost_chunks": proxy.stats.lost},
+            "proxy": {
+                "connections": proxy.stats.connections,
+                "chunks": proxy.stats.chunks,
+                "lost_chunks": proxy.stats.lost,
+                "max_hold_s": round(proxy.stats.max_hold, 2),
+            },
         }
     # the team is stopped: the recording is complete
     sim = last_tick(team.recording)
@@ -121,10 +130,14 @@ async def main(args: argparse.Namespace) -> int:
     out = Path(args.out or tempfile.mkdtemp(prefix="mover-network-"))
     found: dict[str, dict[str, Any]] = {}
     for name in names:
-        figures = await scenario(name, out / name, args.seed, args.timeout, args.rtt_for)
+        figures = await scenario(
+            name, out / name, args.seed, args.timeout, args.rtt_for, args.patience
+        )
         found[name] = figures
         print(f"{name}: {json.dumps(figures)}", flush=True)
-    print(json.dumps({"seed": args.seed, "out": str(out), **headline(found), "scenarios": found}))
+    patience = args.patience or NodeConfig().patience
+    keys = {"seed": args.seed, "patience": patience, "out": str(out), **headline(found)}
+    print(json.dumps({**keys, "scenarios": found}))
     return 0
 
 
@@ -134,6 +147,9 @@ if __name__ == "__main__":
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--out", help="folder for each run's logs and recording (default: a temp)")
     parser.add_argument("--timeout", type=float, default=120.0, help="seconds a run may take")
+    parser.add_argument(
+        "--patience", type=float, help="the team's patience in seconds (default: the default, 10)"
+    )
     parser.add_argument(
         "--rtt-for", type=float, default=40.0, help="seconds the rtt100 run is given"
     )
