@@ -58,27 +58,30 @@ def completed(
     assert team.tracebacks() == {}
 
 
-async def through(fault: str, out: Path) -> tuple[RunResult, bytes]:
-    """Search and rescue through ``fault`` (5 s, 3 s into the run): its result, its recording."""
+async def through(fault: str | None, out: Path) -> tuple[float, bytes]:
+    """Search and rescue through ``fault`` (5 s, 3 s into the run; None: none): how long the
+    run took, its recording."""
     async with Netlab(HOSTS) as lab, TeamAcrossHosts(lab, rescue(), out=out, seed=SEED) as team:
         result = await team.run_with_fault(fault, timeout=120)
         lost = losses(result, team)  # before the stop, whose leaving the world logs
-    assert result.fault == f"{fault} 5 s at +3 s"
     completed(result, team, lost)
     waited = [line for _, line in result.lines if "waiting for" in line]
-    assert len(waited) == 1 and "patience, 10 s" in waited[0]  # said once, while it lasted
-    return result, team.recording.read_bytes()
+    if fault is not None:
+        assert result.fault == f"{fault} 5 s at +3 s"
+        assert len(waited) == 1 and "patience, 10 s" in waited[0]  # said once, while it lasted
+    assert result.run_s is not None
+    return result.run_s, team.recording.read_bytes()
 
 
-@pytest.mark.timeout(240)
+@pytest.mark.timeout(300)
 async def test_search_and_rescue_goes_through_a_partition_and_a_router_stall(
     tmp_path: Path,
 ) -> None:
-    partition, recorded = await through("partition", tmp_path / "partition")
-    stall, again = await through("stall", tmp_path / "stall")
-    assert again == recorded  # lock-step: the faults changed no result
-    assert partition.run_s is not None and stall.run_s is not None
-    print(f"partition: run {partition.run_s:.1f} s; stall: run {stall.run_s:.1f} s")
+    clean, recorded = await through(None, tmp_path / "clean")
+    partition, after_partition = await through("partition", tmp_path / "partition")
+    stall, after_stall = await through("stall", tmp_path / "stall")
+    assert after_partition == recorded and after_stall == recorded  # lock-step: the same run
+    print(f"run: clean {clean:.1f} s, partition 5 s {partition:.1f} s, stall 5 s {stall:.1f} s")
 
 
 def hello(plan: TeamPlan) -> TeamPlan:
@@ -144,6 +147,7 @@ async def test_a_killed_robot_is_reported_at_once(tmp_path: Path) -> None:
         result = await run
         ended = time.monotonic() - killed
     print(result.text)
+    print(f"mover run ended {ended:.1f} s after the SIGKILL")
     assert result.code == 1
     assert re.search(r"FAILED .*elvis", result.text)
     assert ended < 5.0  # the patience (10 s) is for members that may come back, not the dead
