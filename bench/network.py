@@ -1,7 +1,7 @@
 """Search and rescue across hosts, on a clean and a bad network (issue 23's figures).
 
     sudo python bench/network.py [--scenario all|clean|rtt100|partition|stall|loss10]
-                                 [--seed 1] [--out DIR] [--timeout 120]
+                                 [--seed 1] [--out DIR] [--timeout 120] [--patience S]
 
 Builds three hosts (network namespaces, :mod:`mover._netlab`): a runs ``mover router`` (mutual
 TLS and the ACL of ``mover router --gen-config``) and the lock-step world, b the three robots,
@@ -36,6 +36,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+from mover._config import NodeConfig
 from mover._impair import Impairment
 from mover._netlab import Netlab, unavailable
 from mover._netteam import TeamAcrossHosts, last_tick, losses, lost_members
@@ -50,10 +51,18 @@ FAULT_FOR = 5.0
 
 
 async def scenario(
-    name: str, out: Path, seed: int, timeout: float, rtt_for: float, control_delay: int = 0
+    name: str,
+    out: Path,
+    seed: int,
+    timeout: float,
+    rtt_for: float,
+    patience: float | None,
+    control_delay: int = 0,
 ) -> dict[str, Any]:
     """Run one scenario; its figures."""
     plan = load_team(TEAM_FILE)
+    if patience is not None:
+        plan = replace(plan, patience=patience)
     if control_delay and plan.world is not None:  # the world's control delay (sim_hw._delayed)
         plan = replace(plan, world=replace(plan.world, control_delay=control_delay))
     t0 = time.monotonic()
@@ -69,25 +78,8 @@ async def scenario(
             timeout = rtt_for
         elif name == "loss10":
             proxy.up = proxy.down = Impairment(0.05, 0.02, loss=0.1)
-        run = asyncio.create_task(team.run_program(timeout=timeout))
-        fault = ""
-        if name in ("partition", "stall"):
-            started = asyncio.create_task(team.run_started.wait())
-            await asyncio.wait({run, started}, timeout=60, return_when="FIRST_COMPLETED")
-            started.cancel()
-            if team.run_started.is_set() and not run.done():
-                await asyncio.sleep(FAULT_AT)
-                if name == "partition":
-                    async with lab.partition("b", FAULT_FOR):
-                        pass
-                else:
-                    team.stall_router(True)
-                    try:
-                        await asyncio.sleep(FAULT_FOR)
-                    finally:
-                        team.stall_router(False)
-                fault = f"{name} {FAULT_FOR:g} s at +{FAULT_AT:g} s"
-        result = await run
+        fault = name if name in ("partition", "stall") else None
+        result = await team.run_with_fault(fault, at=FAULT_AT, seconds=FAULT_FOR, timeout=timeout)
         # read before the team stops (a stop makes members leave, and the world says so)
         figures: dict[str, Any] = {
             "code": result.code,
@@ -95,14 +87,22 @@ async def scenario(
             "run_s": None if result.run_s is None else round(result.run_s, 1),
             "losses": losses(result, team),
             "lost_members": sorted(lost_members(result, team)),
-            "proxy": {"connections": proxy.stats.connections, "lost_chunks": proxy.stats.lost},
+            "proxy": {
+                "connections": proxy.stats.connections,
+                "chunks": proxy.stats.chunks,
+                "lost_chunks": proxy.stats.lost,
+                "max_hold_s": round(proxy.stats.max_hold, 2),
+            },
         }
     # the team is stopped: the recording is complete
     sim = last_tick(team.recording)
     figures["sim_s"] = None if sim is None else round(sim, 2)
     figures["tracebacks"] = team.tracebacks()
-    if fault:
-        figures["fault"] = fault
+    if result.fault:
+        figures["fault"] = result.fault
+    waits = [line for _, line in result.lines if "waiting for" in line or "answering again" in line]
+    if waits:
+        figures["waited"] = waits[:4]
     failed = [line for _, line in result.lines if "FAILED" in line or "mover run:" in line]
     figures["said"] = failed[:4]
     return figures
@@ -139,11 +139,19 @@ async def main(args: argparse.Namespace) -> int:
     found: dict[str, dict[str, Any]] = {}
     for name in names:
         figures = await scenario(
-            name, out / name, args.seed, args.timeout, args.rtt_for, args.control_delay
+            name,
+            out / name,
+            args.seed,
+            args.timeout,
+            args.rtt_for,
+            args.patience,
+            args.control_delay,
         )
         found[name] = figures
         print(f"{name}: {json.dumps(figures)}", flush=True)
-    print(json.dumps({"seed": args.seed, "out": str(out), **headline(found), "scenarios": found}))
+    patience = args.patience or NodeConfig().patience
+    keys = {"seed": args.seed, "patience": patience, "out": str(out), **headline(found)}
+    print(json.dumps({**keys, "scenarios": found}))
     return 0
 
 
@@ -156,6 +164,9 @@ if __name__ == "__main__":
     )
     parser.add_argument("--out", help="folder for each run's logs and recording (default: a temp)")
     parser.add_argument("--timeout", type=float, default=120.0, help="seconds a run may take")
+    parser.add_argument(
+        "--patience", type=float, help="the team's patience in seconds (default: the default, 10)"
+    )
     parser.add_argument(
         "--rtt-for", type=float, default=40.0, help="seconds the rtt100 run is given"
     )

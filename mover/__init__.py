@@ -43,6 +43,7 @@ from ._exceptions import (
     RobotLost,
     UnknownProcedure,
     UnknownRobot,
+    Unreachable,
     WireError,
 )
 from ._membership import MemberEvent, MemberInfo, Membership
@@ -90,6 +91,7 @@ __all__ = [
     "TeamCredentials",
     "UnknownProcedure",
     "UnknownRobot",
+    "Unreachable",
     "WireError",
     "launch",
     "pack",

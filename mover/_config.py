@@ -9,9 +9,11 @@ Environment (read by ``from_env``): ``MOVER_TEAM``, ``MOVER_TEAM_KEY`` (hex) or
 (comma-separated endpoints such as ``tcp/127.0.0.1:7447``), ``MOVER_ZENOH_CONFIG`` (a json5 file
 merged over the defaults, e.g. TLS settings written by ``mover router --gen-config``).
 
-Timeouts (read by ``from_env`` too; docs/transport.md says how the defaults were measured):
-``MOVER_LEASE_MS`` (a link silent this long is closed and its members leave; default 1000),
-``MOVER_KEEP_ALIVE`` (keep-alives sent per lease; default 4), ``MOVER_HELLO_TIMEOUT`` (seconds
+Timeouts (read by ``from_env`` too; docs/transport.md and docs/network-lab.md say how the
+defaults were measured): ``MOVER_PATIENCE`` (seconds a member that is unreachable but not known
+dead stays *suspected* before it is lost; default 10), ``MOVER_LEASE_MS`` (a link silent this
+long is closed and its members leave; default the patience), ``MOVER_KEEP_ALIVE``
+(keep-alives sent per lease; default 10), ``MOVER_HELLO_TIMEOUT`` (seconds
 one hello question waits for its answer; default 5), ``MOVER_HELLO_RETRIES`` (unanswered hellos
 asked again, 0.2 s to 3 s apart; default 8) and ``MOVER_LEAVE_GRACE`` (seconds a member that left
 may take to come back before what it held is given up; default 1).
@@ -37,12 +39,14 @@ MIN_KEY_BYTES = 16
 
 # name: (environment variable, smallest, largest) of each timeout knob of NodeConfig
 _KNOBS: dict[str, tuple[str, float, float]] = {
+    "patience": ("MOVER_PATIENCE", 0.1, 3600.0),
     "lease_ms": ("MOVER_LEASE_MS", 100, 600_000),
     "keep_alive": ("MOVER_KEEP_ALIVE", 1, 100),
     "hello_timeout": ("MOVER_HELLO_TIMEOUT", 0.1, 600.0),
     "hello_retries": ("MOVER_HELLO_RETRIES", 0, 100),
     "leave_grace": ("MOVER_LEAVE_GRACE", 0.0, 600.0),
 }
+_INTEGRAL = {"lease_ms", "keep_alive", "hello_retries"}
 
 
 @dataclass(frozen=True)
@@ -96,9 +100,14 @@ class TeamCredentials:
 class NodeConfig:
     """Zenoh settings and membership timeouts for one node.
 
+    ``patience``: seconds a member that is unreachable but not known dead (a link that went
+    silent: a partition, a stalled router, a long loss burst) is *suspected* and waited for
+    before it is lost; a member whose process is known dead (its session closed: it exited or
+    was killed, and its socket closed) is lost at once whatever the patience.
     ``lease_ms``: a zenoh link that hears nothing for this long is closed, and the members
-    behind it leave (a SIGKILLed process is seen gone at once whatever the lease: its socket
-    closes). ``keep_alive``: keep-alives per lease. ``hello_timeout``, ``hello_retries``: how
+    behind it leave; None (the default) makes it the patience, so that a link that comes back
+    within the patience never closed (see docs/network-lab.md). ``keep_alive``: keep-alives per
+    lease. ``hello_timeout``, ``hello_retries``: how
     long one hello question waits and how often an unanswered one is asked again before a token
     holder is given up as unverified. ``leave_grace``: how long a member that left may take to
     come back before what it held (its calls, its body in a world) is given up.
@@ -108,17 +117,20 @@ class NodeConfig:
     listen: tuple[str, ...] = ("tcp/127.0.0.1:0",)
     connect: tuple[str, ...] = ()
     multicast: bool = False
-    lease_ms: int = 1000
-    keep_alive: int = 4
+    lease_ms: int | None = None
+    keep_alive: int = 10
     overrides: dict[str, Any] = field(default_factory=dict)
     hello_timeout: float = 5.0
     hello_retries: int = 8
     leave_grace: float = 1.0
+    patience: float = 10.0
 
     def __post_init__(self) -> None:
         for name, (_, low, high) in _KNOBS.items():
             value = getattr(self, name)
-            integral = isinstance(getattr(NodeConfig, name), int)
+            integral = name in _INTEGRAL
+            if value is None and name == "lease_ms":
+                continue
             if (
                 isinstance(value, bool)
                 or not isinstance(value, int if integral else (int, float))
@@ -127,9 +139,14 @@ class NodeConfig:
             ):
                 kind = "an integer" if integral else "a number"
                 raise ConfigError(f"{name} must be {kind} from {low} to {high}, not {value!r}")
-        if self.lease_ms / self.keep_alive < 10:
-            every = f"{self.lease_ms}/{self.keep_alive}"
+        if self.lease / self.keep_alive < 10:
+            every = f"{self.lease}/{self.keep_alive}"
             raise ConfigError(f"lease_ms / keep_alive must be at least 10 ms, not {every}")
+
+    @property
+    def lease(self) -> int:
+        """The zenoh link lease in milliseconds: ``lease_ms``, else the patience."""
+        return self.lease_ms if self.lease_ms is not None else round(self.patience * 1000)
 
     @classmethod
     def from_env(cls, connect: Sequence[str] = ()) -> NodeConfig:
@@ -181,7 +198,7 @@ class NodeConfig:
             "listen/endpoints": list(self.listen),
             "connect/endpoints": list(self.connect),
             "scouting/multicast/enabled": self.multicast,
-            "transport/link/tx/lease": self.lease_ms,
+            "transport/link/tx/lease": self.lease,
             "transport/link/tx/keep_alive": self.keep_alive,
             # Retry quickly after a peer or router restart (docs/transport.md).
             "connect/retry": {"period_init_ms": 100, "period_max_ms": 500},
@@ -202,7 +219,7 @@ def _knobs_from_env() -> dict[str, Any]:
         raw = os.environ.get(var)
         if raw is None or not raw.strip():
             continue
-        integral = isinstance(getattr(NodeConfig, name), int)
+        integral = name in _INTEGRAL
         try:
             value: float = int(raw) if integral else float(raw)
         except ValueError:

@@ -18,6 +18,7 @@
     ├── MemberLost                 a member of a collective step left before it finished
     ├── NameTaken                  a live member already holds the name a node would take
     ├── ConfigError                a team or transport setting is wrong (also a ValueError)
+    │   ├── Unreachable            no router or peer answered at the endpoints within a bound
     │   └── FileError              a file is wrong: .source, .line, .where (the key), .problem
     │       ├── TeamFileError      a team file (mover up)
     │       ├── WorldFileError     a continuous world file, or a robot's settings (sim_hw)
@@ -115,6 +116,12 @@ class MemberLost(MoverError):
 
 class ConfigError(MoverError, ValueError):
     """A team or transport setting (from the environment, a flag or a file) is wrong."""
+
+
+class Unreachable(ConfigError):
+    """A node could not reach any of the endpoints it connects to (its router, its peers)
+    within the bound it was given: the endpoints are wrong, or the network or the router is
+    down. Raised by ``Node.open`` for a tool (a CLI verb); a member process waits instead."""
 
 
 class FileError(ConfigError):

@@ -74,14 +74,17 @@ class Impairment:
 
 @dataclass
 class ProxyStats:
-    """Counts since the proxy started: connections accepted, bytes delivered each way, losses
-    (a chunk lost twice counts twice), and the most bytes one direction of one connection held
-    at once."""
+    """Counts since the proxy started: connections accepted, chunks read and bytes delivered
+    each way, losses (a chunk lost twice counts twice), the longest a chunk was held by its
+    draw (seconds; stalls aside) and the most bytes one direction of one connection held at
+    once."""
 
     connections: int = 0
+    chunks: int = 0
     bytes_up: int = 0
     bytes_down: int = 0
     lost: int = 0
+    max_hold: float = 0.0
     max_buffered: int = 0
 
 
@@ -217,6 +220,8 @@ class ImpairProxy:
             while data := await reader.read(CHUNK):
                 hold, lost = (self.up if way == "up" else self.down).draw(self._rng)
                 self.stats.lost += lost
+                self.stats.chunks += 1
+                self.stats.max_hold = max(self.stats.max_hold, hold)
                 pipe.due = max(pipe.due, time.monotonic() + hold)
                 pipe.queue.append((pipe.due, data))
                 pipe.buffered += len(data)

@@ -5,7 +5,13 @@ Every node holds a liveliness token ``mover/<team>/alive/<name>``. A token alone
 hello sealed under the team key and carrying a fresh challenge; only then is it a member, and
 the hello tells the asker the member's session (see ``_wire.Sessions``). A token
 that goes away (the process exited, was SIGKILLed — seen within milliseconds — or hung past its
-one-second lease) makes the member leave.
+lease, the team's patience) makes the member leave.
+
+*Dead* and *unreachable* differ. A member whose session closed (it exited, or was killed: its
+socket closed) leaves at once. A member whose link went silent (a partition, a stalled router, a
+burst of loss) stays a member for the team's patience (``NodeConfig.patience``, the zenoh lease):
+a node that waits for it may :meth:`Membership.probe` it, and one that does not answer is
+*suspected* (:meth:`Membership.suspected`, one log line) until it answers again or leaves.
 
 What a stranger's token costs is bounded: one question when it appears, and at most
 ``hello_retries`` more, backing off from 0.2 s to 3 s; at most :data:`MAX_RETRYING` names are
@@ -39,6 +45,9 @@ log = logging.getLogger("mover.team")
 
 MAX_RETRYING = 64
 """Names whose hello is asked again at once, at most (each unanswered token waits its turn)."""
+PROBE_TIMEOUT = 2.0
+"""Seconds a probed member has to answer a fresh hello before it is suspected: above the
+slowest answer seen from a busy member across the impaired link (docs/network-lab.md)."""
 
 
 @dataclass(frozen=True)
@@ -80,6 +89,7 @@ class Membership:
         self._asked: dict[str, float] = {}  # name -> when a hello was last asked unprompted
         self._retrying: set[str] = set()  # tokens whose hello is being asked again
         self._waiting: dict[str, int] = {}  # tokens waiting their turn -> the attempt they are at
+        self._suspected: dict[str, float] = {}  # member -> since when (monotonic) it is
         self.faults = RateLog(state.name, log)
         """The rate-limited log of what strangers did (fake tokens, junk hellos), with counts."""
 
@@ -125,6 +135,37 @@ class Membership:
             while len(self._members) < n:
                 await self._wait_change()
 
+    def suspected(self) -> dict[str, float]:
+        """Members that did not answer their last :meth:`probe`: each one's seconds since it
+        stopped answering. A suspected member is still a member: it leaves when its link has
+        been silent for the patience, or at once if its session closes."""
+        now = time.monotonic()
+        return {name: now - since for name, since in self._suspected.items()}
+
+    async def probe(self, names: Iterable[str], timeout: float = PROBE_TIMEOUT) -> dict[str, float]:
+        """Ask each member of ``names`` (this node aside) for a fresh hello at once: one that
+        does not answer within ``timeout`` is suspected (one log line, when it starts), one that
+        answers is not (one line, if it was). The suspected among ``names``, as
+        :meth:`suspected` gives them."""
+        me = self._state.name
+        asked = [n for n in dict.fromkeys(names) if n != me and n in self._members]
+        answers = await asyncio.gather(*(self.verify(n, timeout, fresh=True) for n in asked))
+        now = time.monotonic()
+        patience = self._state.config.patience
+        for name, epoch in zip(asked, answers, strict=True):
+            if name not in self._members:
+                continue  # it left meanwhile (_leave forgot it)
+            if epoch is None and name not in self._suspected:
+                self._suspected[name] = now - timeout
+                log.warning(
+                    "%s: %s suspected: no answer for %.0f s (lost if its link stays silent "
+                    "for the patience, %g s)",
+                    me, name, timeout, patience,
+                )  # fmt: skip
+            elif epoch is not None and self._suspected.pop(name, None) is not None:
+                log.warning("%s: %s answers again", me, name)
+        return {n: now - self._suspected[n] for n in asked if n in self._suspected}
+
     def has_token(self, name: str) -> bool:
         """Whether some node holds ``name``'s liveliness token now (verified or not)."""
         return name in self._tokens
@@ -167,6 +208,7 @@ class Membership:
             self._emit(MemberEvent("join", info.name, info))
 
     def _leave(self, name: str) -> None:
+        self._suspected.pop(name, None)
         info = self._members.pop(name, None)
         if info is None:
             return

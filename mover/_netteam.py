@@ -6,7 +6,7 @@ hosts.
 
     async with Netlab(("a", "b", "c")) as lab, TeamAcrossHosts(lab, plan, out=run_dir) as team:
         result = await team.run_program(timeout=120)      # `mover run` on host c
-        async with lab.partition("b", 5.0): ...            # or team.stall_router(5.0), ...
+        result = await team.run_with_fault("partition")     # b cut off 5 s, 3 s into the run
 
 Host ``router`` (default a) runs ``mover router`` with the config of ``mover router
 --gen-config`` (certificates for the world, every member and ``workstation``, the ACL) and the
@@ -19,7 +19,9 @@ it. The world and the members are started with the command lines of ``mover up``
 (:mod:`mover._up._plan`), so a seed gives the run ``mover up``/``mover demo`` give it on one
 machine. Readiness is membership: ``mover run --robots`` waits until the members are in the team.
 Every process's output goes to ``<out>/<name>.log``; on exit all are stopped (SIGINT, then
-SIGTERM, then SIGKILL, as ``mover up`` does) and the lab kills anything left.
+SIGTERM, then SIGKILL, as ``mover up`` does) and the lab kills anything left. With
+``router_first=False`` the world and the members start before the router (a router outage at
+start: they say so and wait), which :meth:`TeamAcrossHosts.start_router` then starts.
 """
 
 from __future__ import annotations
@@ -72,6 +74,7 @@ class RunResult:
     lines: list[tuple[float, str]] = field(default_factory=list)
     started: float | None = None
     ended: float = 0.0
+    fault: str | None = None  # what run_with_fault did (None: nothing, the run ended first)
 
     @property
     def run_s(self) -> float | None:
@@ -97,6 +100,7 @@ class TeamAcrossHosts:
         members: str = "b",
         workstation: str = "c",
         proxied: bool = True,
+        router_first: bool = True,
         log_level: str = "WARNING",
         env: dict[str, str] | None = None,
     ) -> None:
@@ -110,6 +114,7 @@ class TeamAcrossHosts:
         self.seeds: Seeds = seeds(plan, seed)
         self.where = {"router": router, "members": members, "workstation": workstation}
         self.proxied = proxied
+        self.router_first = router_first
         self.team = TeamCredentials.generate(plan.name)
         self.extra_env = env or {}
         self.router: Child | None = None
@@ -158,23 +163,31 @@ class TeamAcrossHosts:
                 config = json.loads(path.read_text())
                 config["connect/endpoints"] = [f"tls/{a.address}:{PROXY_PORT}"]
                 path.write_text(json.dumps(config, indent=2))
-        self.router = await self._spawn(
-            self.where["router"],
-            "router",
-            ["router", "--config", str(tls / "router.json")],
-            ready="router ",
-        )
+        if self.router_first:
+            await self.start_router()
         world = world_argv(self.plan.world, self.seeds, self.out)
         self.world = await self._spawn(self.where["router"], self.plan.world.name, world[3:])
         for m in self.plan.members:
             argv = member_argv(m)[3:]
             self.members.append(await self._spawn(self.where["members"], m.name, argv))
 
-    def _env(self, cert: str) -> dict[str, str]:
+    async def start_router(self) -> None:
+        """Start ``mover router`` on the router's host; return once it listens."""
+        tls = self.out / "tls"
+        self.router = await self._spawn(
+            self.where["router"],
+            "router",
+            ["router", "--config", str(tls / "router.json")],
+            ready="router ",
+        )
+
+    def env(self, cert: str) -> dict[str, str]:
         """The environment of the process with certificate ``cert`` (the router: its own
         config file, no member's)."""
         env = {k: v for k, v in os.environ.items() if not k.startswith("MOVER_")}
         env |= {"MOVER_LOG_LEVEL": self.log_level, "PYTHONUNBUFFERED": "1"}
+        if self.plan.patience is not None:  # the router's links last as long as the members'
+            env["MOVER_PATIENCE"] = f"{self.plan.patience:g}"
         if cert != "router":
             env |= {
                 **self.team.env(),
@@ -192,7 +205,7 @@ class TeamAcrossHosts:
         child = await self.lab.start(
             host,
             [sys.executable, "-m", "mover._cli", *args],
-            env=self._env(name),
+            env=self.env(name),
             log=log,
             pump=True,
             label=name,
@@ -229,7 +242,7 @@ class TeamAcrossHosts:
         args += ["--args", json.dumps(p.args)]
         args += ["--share"] if p.share else []
         args += ["--survivors"] if p.survivors else []
-        env = {**self._env(WORKSTATION)}
+        env = {**self.env(WORKSTATION)}
         child = await self.lab.start(
             self.where["workstation"],
             [sys.executable, "-m", "mover._cli", *args],
@@ -258,6 +271,51 @@ class TeamAcrossHosts:
                 await asyncio.wait_for(pump, 5)
         result.ended = time.monotonic() - t0
         return result
+
+    async def run_with_fault(
+        self,
+        fault: str | None = None,
+        *,
+        at: float = 3.0,
+        seconds: float = 5.0,
+        timeout: float = 120.0,
+    ) -> RunResult:
+        """:meth:`run_program`, with ``fault`` for ``seconds``, ``at`` seconds into the run (from
+        its ``run NAME:`` line): ``"partition"`` pulls the members' host's cable, ``"stall"``
+        SIGSTOPs the router. ``result.fault`` says what was done (None if the run ended first).
+        """
+        if fault not in (None, "partition", "stall"):
+            raise ValueError(f"no fault {fault!r}: partition or stall")
+        run = asyncio.ensure_future(self.run_program(timeout=timeout))
+        done = None
+        try:
+            if fault is not None:
+                started = asyncio.ensure_future(self.run_started.wait())
+                await asyncio.wait({run, started}, timeout=60, return_when="FIRST_COMPLETED")
+                started.cancel()
+                if self.run_started.is_set() and not run.done():
+                    await asyncio.sleep(at)
+                    if not run.done():
+                        await self._fault(fault, seconds)
+                        done = f"{fault} {seconds:g} s at +{at:g} s"
+            result = await run
+        finally:
+            if not run.done():
+                run.cancel()
+                with contextlib.suppress(asyncio.CancelledError):
+                    await run
+        result.fault = done
+        return result
+
+    async def _fault(self, fault: str, seconds: float) -> None:
+        if fault == "partition":
+            async with self.lab.partition(self.where["members"], seconds):
+                return
+        self.stall_router(True)
+        try:
+            await asyncio.sleep(seconds)
+        finally:
+            self.stall_router(False)
 
     def stall_router(self, stopped: bool) -> None:
         """SIGSTOP the router (``stopped``) or SIGCONT it."""

@@ -23,7 +23,7 @@ import zenoh
 from . import _deprecated, _keys
 from ._bridge import Portal, run_blocking, sample_size
 from ._config import NodeConfig, TeamCredentials
-from ._exceptions import MoverError, NameTaken
+from ._exceptions import ConfigError, MoverError, NameTaken, Unreachable
 from ._membership import Membership
 from ._radio import Locator, Message, Neighbour, PubSub, Radio, RadioModel, Subscription
 from ._rpc import RpcClient, RpcServer, procedures_of
@@ -31,6 +31,10 @@ from ._session import SessionState
 from ._wire import DEFAULT_MAX_SIZE, Opener, Sealer
 
 log = logging.getLogger("mover.node")
+
+REACH_RETRY = (0.2, 5.0)
+"""Seconds between tries to reach the router or peers at start: the first, and the most (it
+doubles from one to the next)."""
 
 
 class _Declared(Protocol):
@@ -46,6 +50,11 @@ class Node:
     unsigned refusal (it gets ``Refused``), ``"ignore"`` tells it nothing (it sees the robot as
     unknown). Either way nothing runs and a log line is written. An ``observer`` node (for
     tools like ``mover ps``) holds no liveliness token and is not a member.
+
+    A node that cannot reach its router or peers when it opens (client mode: zenoh refuses to
+    open) says so in one log line and tries again, backing off (:data:`REACH_RETRY`): a member
+    until the network comes up, an observer (a tool, a CLI verb) for at most its
+    ``config.patience``, then :class:`~mover.Unreachable`.
     """
 
     def __init__(
@@ -110,9 +119,8 @@ class Node:
         """Open the zenoh session and join the team."""
         if self._state.is_open:
             raise MoverError("node is already open")
+        session = await self._reach()
         portal = Portal(asyncio.get_running_loop())
-        conf = self.config.to_zenoh()
-        session = await run_blocking(lambda: zenoh.open(conf))
         self._state.opened(session, portal)
         team = self.team_config.name
         self.membership.on_leave(self._member_left)
@@ -140,6 +148,45 @@ class Node:
         if not self.observer:
             self._declared.append(session.liveliness().declare_token(_keys.alive(team, self.name)))
         return self
+
+    async def _reach(self) -> zenoh.Session:
+        """A zenoh session, once one of the endpoints answers (see the class docstring)."""
+        loop = asyncio.get_running_loop()
+        bound = self.config.patience if self.observer else None
+        started = loop.time()
+        wait, said = REACH_RETRY[0], ""
+        while True:
+            try:  # a new zenoh config each time: zenoh takes it
+                session: zenoh.Session = await run_blocking(
+                    lambda: zenoh.open(self.config.to_zenoh())
+                )
+            except zenoh.ZError as exc:
+                why = str(exc).split("!")[0].split(" at /")[0].strip()
+                if "Unable to connect" not in why:
+                    raise ConfigError(f"cannot open a zenoh session: {why}") from None
+                where = ", ".join(self._endpoints()) or "no endpoint"
+                if bound is not None and loop.time() - started + wait > bound:
+                    raise Unreachable(
+                        f"cannot reach {where} within {bound:g} s (is the router up? "
+                        "MOVER_CONNECT or the zenoh config names the endpoints)"
+                    ) from None
+                if not said:
+                    said = where
+                    until = "until it answers" if bound is None else f"for {bound:g} s"
+                    log.warning("%s: cannot reach %s: trying again %s", self.name, where, until)
+                await asyncio.sleep(wait)
+                wait = min(wait * 2, REACH_RETRY[1])
+                continue
+            if said:
+                log.warning("%s: reached %s after %.1f s", self.name, said, loop.time() - started)
+            return session
+
+    def _endpoints(self) -> list[str]:
+        """The endpoints this node connects to (its settings, or its zenoh config file's)."""
+        given = self.config.overrides.get("connect/endpoints", self.config.connect)
+        if isinstance(given, dict):  # zenoh's per-mode form
+            given = given.get(self.config.mode, [])
+        return [str(e) for e in given] if isinstance(given, (list, tuple)) else []
 
     async def _refuse_a_taken_name(self) -> None:
         """Refuse to start (NameTaken) if a live node of the team already answers to our name."""

@@ -175,6 +175,7 @@ class Supervisor:
             **config.env(),
             "MOVER_LOG_LEVEL": level,
             "PYTHONUNBUFFERED": "1",
+            **({"MOVER_PATIENCE": f"{p:g}"} if (p := self.plan.patience) is not None else {}),
         }
 
     async def _spawn(self, p: ProcessPlan, env: dict[str, str]) -> _Child:

@@ -118,6 +118,7 @@ class TeamPlan:
     port: int | None = None  # None: a free port
     log_level: str | None = None
     ready_timeout: float | None = None  # None: 30 s and 2 s a process (they start on few cores)
+    patience: float | None = None  # None: $MOVER_PATIENCE, else NodeConfig's (10 s)
     world: WorldPlan | None = None
     members: tuple[MemberPlan, ...] = ()
     program: ProgramPlan | None = None
@@ -174,13 +175,16 @@ _LEVEL = Kind("a log level", _level)
 _SEED = integer(high=MAX_SEED)
 _WAIT = number(high=MAX_WAIT)
 _EXPECT = integer(high=MAX_PROCESSES)
+_PATIENCE = number(low=0.1, high=3600.0, strict=False)
 
 
 # -- the sections ------------------------------------------------------------------------------
 
 
 def _team(t: Table, path: Path) -> TeamPlan:
-    t.only(("name", "key_file", "seed", "topology", "port", "log_level", "ready_timeout"))
+    t.only(
+        ("name", "key_file", "seed", "topology", "port", "log_level", "ready_timeout", "patience")
+    )
     key_file = t.option("key_file", STRING)
     level = t.option("log_level", _LEVEL)
     return TeamPlan(
@@ -192,6 +196,7 @@ def _team(t: Table, path: Path) -> TeamPlan:
         port=t.option("port", integer(low=1, high=65535)),
         log_level=level,
         ready_timeout=t.option("ready_timeout", _WAIT),
+        patience=t.option("patience", _PATIENCE),
     )
 
 

@@ -26,7 +26,7 @@ import threading
 from pathlib import Path
 from typing import Any
 
-from .._config import NodeConfig, _read_overrides
+from .._config import NodeConfig, _knobs_from_env, _read_overrides
 from .._endpoints import beyond_loopback_in_clear, check_endpoint
 from .._exceptions import ConfigError
 from .._keys import check_name
@@ -143,7 +143,10 @@ def listening(args: argparse.Namespace) -> tuple[NodeConfig, list[str]]:
             f"warning: {', '.join(clear)} can be reached from other machines without TLS: "
             "anyone there can join the network (mover router --gen-config writes TLS and an ACL)"
         )
-    return NodeConfig(mode="router", listen=listen, overrides=overrides), notes
+    # the team's patience and timeouts ($MOVER_PATIENCE...): the members' links to the router
+    # last as long as theirs to each other
+    config = NodeConfig(mode="router", listen=listen, overrides=overrides, **_knobs_from_env())
+    return config, notes
 
 
 def serve(config: NodeConfig) -> None:

@@ -40,6 +40,9 @@ if TYPE_CHECKING:
 log = logging.getLogger("mover.cli")
 
 STATE_ENV = "MOVER_STATE_DIR"
+PROBE_EVERY = 2.0
+"""Seconds between the probes ``mover run`` makes of the members it waits for (a fresh hello
+each: :meth:`mover.Membership.probe`), to say when it waits for unreachable ones."""
 _TEAMS_KEPT = 100  # team names teams.json remembers
 _STATE_LIMIT = 1 << 20  # bytes of teams.json read at most
 
@@ -132,6 +135,33 @@ def _progress(node: Node, run: str) -> asyncio.Task[None]:
     return asyncio.create_task(show())
 
 
+def _watch(node: Node, members: list[str]) -> asyncio.Task[None]:
+    """While the outcomes are awaited: probe the members every ``PROBE_EVERY`` s and say, in
+    one line each time it changes, which ones do not answer (they are suspected: the run waits
+    for them for the team's patience) and when they answer again (a task; cancel it)."""
+    started = time.monotonic()
+    patience = node.config.patience
+
+    async def watch() -> None:
+        said: set[str] = set()
+        while True:
+            await asyncio.sleep(PROBE_EVERY)
+            silent = await node.membership.probe(members)
+            now = f"[{time.monotonic() - started:6.1f}s]"
+            if back := said - silent.keys():
+                print(f"{now} {', '.join(sorted(back))}: answering again", flush=True)
+            if silent.keys() - said:
+                print(
+                    f"{now} waiting for {', '.join(sorted(silent))}: no answer for "
+                    f"{max(silent.values()):.0f} s (unreachable, not known dead: the run waits "
+                    f"up to the patience, {patience:g} s)",
+                    flush=True,
+                )
+            said = set(silent)
+
+    return asyncio.create_task(watch())
+
+
 async def _run(
     team: TeamCredentials,
     config: NodeConfig,
@@ -181,7 +211,11 @@ async def _run(
             # said once every member has started it: from now on they know the run
             print(f"run {run}: {args.program} on {', '.join(members)}", flush=True)
             if not args.detach:
-                ends = await outcomes(node, run, members)
+                watch = _watch(node, members)
+                try:
+                    ends = await outcomes(node, run, members)
+                finally:
+                    watch.cancel()
         except CallError as exc:
             print(f"mover run: {type(exc).__name__}: {exc}", file=sys.stderr)
             return 1
@@ -251,7 +285,11 @@ async def _attach(team: TeamCredentials, config: NodeConfig, args: argparse.Name
                 entry = found.get(member)
                 where = f"{entry.get('state')}, {entry.get('phase')}" if entry else NO_ANSWER
                 print(f"  {member}: {where}", flush=True)
-            ends = await outcomes(node, run, members)
+            watch = _watch(node, members)
+            try:
+                ends = await outcomes(node, run, members)
+            finally:
+                watch.cancel()
         finally:
             await asyncio.sleep(0.1)
             shower.cancel()

@@ -31,7 +31,7 @@ pytestmark = [pytest.mark.processes, pytest.mark.asyncio(loop_scope="module")]
 
 MEMBER = "tests.helpers.step_member"
 NAMES = ["a", "b", "c"]
-LOSS_BOUND = NodeConfig().lease_ms / 1000 + LOST_GRACE  # a stalled member; a dead one: sooner
+LOSS_BOUND = NodeConfig.from_env().lease / 1000 + LOST_GRACE  # a stalled member; a dead one: sooner
 ENDS_WITHIN = LOSS_BOUND + 2.0
 STOPPED = LOSS_BOUND + 1.0  # a SIGSTOP past its lease and the team's grace
 

@@ -1,0 +1,154 @@
+"""A team across hosts through the faults of a real network (issue 23): a run stalls and resumes,
+it is never lost, and a member known dead is still reported at once.
+
+Search and rescue (``teams/search_and_rescue.toml``, the team's patience at its default, 10 s)
+across three hosts, every process a client of one router over mutual TLS (router and world on
+a, the robots on b behind an impairment proxy, ``mover run`` on c): through a 5 s partition of b
+and a 5 s router stall it completes, with the recording of a clean run, no member lost and no
+traceback; ``mover run`` says that it waits. Under loss (10 % and 2 % at 50 ± 20 ms each way)
+``hello_team`` runs to its end (lock-step search and rescue takes minutes at that round trip);
+processes started while the router is down say so, wait, and come up with it; a tool gives up
+after its patience in one line; a SIGKILLed robot ends the run at once, not after the patience.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import re
+import signal
+import sys
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import pytest
+
+from mover._impair import Impairment
+from mover._netteam import WORKSTATION, RunResult, last_tick, losses
+from mover._up import load_team
+from mover._up._teamfile import ProgramPlan, TeamPlan
+from mover.testing import Netlab, TeamAcrossHosts, netlab_unavailable
+from tests.helpers.procs import ROOT
+
+pytestmark = [
+    pytest.mark.processes,
+    pytest.mark.netns,
+    pytest.mark.skipif(
+        (reason := netlab_unavailable()) is not None, reason=f"no lab of hosts: {reason}"
+    ),
+]
+
+SEED = 1
+HOSTS = ("a", "b", "c")
+
+
+def rescue() -> TeamPlan:
+    return load_team(ROOT / "teams" / "search_and_rescue.toml")
+
+
+def completed(
+    result: RunResult, team: TeamAcrossHosts, lost: dict[str, int], end: str = ": done"
+) -> None:
+    """The run ended well on all three robots (each said ``end``), nobody was said lost, no
+    process traced back."""
+    print(result.text)
+    assert result.code == 0, result.text
+    assert result.text.count(end) == 3
+    assert lost == {}
+    assert team.tracebacks() == {}
+
+
+async def through(fault: str | None, out: Path) -> tuple[float, bytes]:
+    """Search and rescue through ``fault`` (5 s, 3 s into the run; None: none): how long the
+    run took, its recording."""
+    async with Netlab(HOSTS) as lab, TeamAcrossHosts(lab, rescue(), out=out, seed=SEED) as team:
+        result = await team.run_with_fault(fault, timeout=120)
+        lost = losses(result, team)  # before the stop, whose leaving the world logs
+    completed(result, team, lost)
+    waited = [line for _, line in result.lines if "waiting for" in line]
+    if fault is not None:
+        assert result.fault == f"{fault} 5 s at +3 s"
+        assert len(waited) == 1 and "patience, 10 s" in waited[0]  # said once, while it lasted
+    assert result.run_s is not None
+    return result.run_s, team.recording.read_bytes()
+
+
+@pytest.mark.timeout(300)
+async def test_search_and_rescue_goes_through_a_partition_and_a_router_stall(
+    tmp_path: Path,
+) -> None:
+    clean, recorded = await through(None, tmp_path / "clean")
+    partition, after_partition = await through("partition", tmp_path / "partition")
+    stall, after_stall = await through("stall", tmp_path / "stall")
+    assert after_partition == recorded and after_stall == recorded  # lock-step: the same run
+    print(f"run: clean {clean:.1f} s, partition 5 s {partition:.1f} s, stall 5 s {stall:.1f} s")
+
+
+def hello(plan: TeamPlan) -> TeamPlan:
+    """The team of ``plan`` running hello_team (radio, calls, a collective; seconds long)."""
+    return replace(plan, program=ProgramPlan("hello_team", run="hello"))
+
+
+@pytest.mark.timeout(240)
+@pytest.mark.parametrize("loss", [0.1, 0.02])
+async def test_a_team_runs_to_its_end_at_a_lossy_50ms_link(tmp_path: Path, loss: float) -> None:
+    async with (
+        Netlab(HOSTS) as lab,
+        TeamAcrossHosts(lab, hello(rescue()), out=tmp_path, seed=SEED) as team,
+    ):
+        assert team.proxy is not None
+        team.proxy.up = team.proxy.down = Impairment(0.05, 0.02, loss=loss)
+        result = await team.run_program(timeout=120)
+        lost = losses(result, team)
+        chunks_lost = team.proxy.stats.lost
+    completed(result, team, lost, end='"team_size": 3')
+    print(f"loss {loss:.0%}: {chunks_lost} chunks retransmitted; run {result.run_s} s")
+
+
+@pytest.mark.timeout(240)
+async def test_processes_started_while_the_router_is_down_come_up_with_it(tmp_path: Path) -> None:
+    async with (
+        Netlab(HOSTS) as lab,
+        TeamAcrossHosts(lab, rescue(), out=tmp_path, seed=SEED, router_first=False) as team,
+    ):
+        tool = {**team.env(WORKSTATION), "MOVER_PATIENCE": "1"}
+        t0 = time.monotonic()
+        code, said = await lab.run("c", sys.executable, "-m", "mover._cli", "ps", env=tool)
+        print(said)
+        assert code != 0 and time.monotonic() - t0 < 15
+        assert "Traceback" not in said
+        assert re.search(r"mover ps: cannot reach tls/\S+ within 1 s", said)
+        run = asyncio.ensure_future(team.run_program(timeout=120))  # mover run, router down too
+        await asyncio.sleep(3.0)
+        await team.start_router()
+        result = await run
+        lost = losses(result, team)
+    completed(result, team, lost)
+    for name in ("world", "elvis", "ernst", "moseley"):
+        log = (tmp_path / f"{name}.log").read_text()
+        assert log.count("cannot reach tls/") == 1, log  # one line, however long it waits
+        assert log.count("reached tls/") == 1, log
+    assert last_tick(team.recording) is not None
+
+
+@pytest.mark.timeout(180)
+async def test_a_killed_robot_is_reported_at_once(tmp_path: Path) -> None:
+    async with (
+        Netlab(HOSTS) as lab,
+        TeamAcrossHosts(lab, rescue(), out=tmp_path, seed=SEED) as team,
+    ):
+        run = asyncio.ensure_future(team.run_program(timeout=120))
+        await asyncio.wait_for(team.run_started.wait(), 60)
+        await asyncio.sleep(1.0)
+        killed = time.monotonic()
+        team.members[0].signal(
+            signal.SIGKILL
+        )  # elvis: its socket closes, the router sees it at once
+        result = await run
+        ended = time.monotonic() - killed
+    print(result.text)
+    print(f"mover run ended {ended:.1f} s after the SIGKILL")
+    assert result.code == 1
+    assert re.search(r"FAILED .*elvis", result.text)
+    assert ended < 5.0  # the patience (10 s) is for members that may come back, not the dead
+    assert team.tracebacks() == {}
