@@ -48,6 +48,7 @@ log = logging.getLogger("mover.cli")
 MAX_WAIT = 3600.0  # seconds a verb may be asked to wait for the team
 ECHO_QUEUE = 1000  # messages mover echo keeps unread at most
 STATUS_TIMEOUT = 3.0  # seconds a member has to answer mover.status
+SETTLE = 0.3  # seconds between a peer's queries for the team's members (see discover)
 NO_ANSWER = "(no answer)"
 NO_PROGRAMS = "-"  # a member that hosts no programs (a world, a tool)
 
@@ -147,10 +148,21 @@ async def observe(
 
 
 async def discover(node: Node, wait: float) -> None:
-    """Return once ``node`` knows every member there is now (one liveliness query for the
-    token holders, then their hellos), or after ``wait`` seconds with those it knows."""
+    """Return once ``node`` knows every member there is now, or after ``wait`` seconds with
+    those it knows. Who is there: one liveliness query for the token holders (a router answers
+    for the whole team), then their hellos. A peer links to the other peers one by one as it
+    hears of them, and a query reaches only those it has linked to: as a peer, ask again until
+    the answer has held still for :data:`SETTLE` seconds."""
     deadline = time.monotonic() + wait
     holders = await alive(node, wait)
+    if node.config.mode != "client":
+        still = time.monotonic()
+        while (now := time.monotonic()) < deadline and now - still < SETTLE:
+            await asyncio.sleep(min(SETTLE / 3, deadline - now))
+            again = await alive(node, max(0.0, deadline - time.monotonic()))
+            if not again <= holders:
+                holders |= again
+                still = time.monotonic()
     with contextlib.suppress(TimeoutError):
         await node.membership.wait_for(holders, timeout=max(0.0, deadline - time.monotonic()))
 
