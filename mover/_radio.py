@@ -404,7 +404,7 @@ class PubSub:
 
     def _follow_soon(self) -> None:
         """Follow this node's moves every :data:`FOLLOW` seconds while it listens to cells."""
-        if self._follow_timer is None and self.radio.locator is not None:
+        if self._follow_timer is None:
             self._follow_timer = asyncio.get_running_loop().call_later(FOLLOW, self._on_timer)
 
     def _on_timer(self) -> None:
