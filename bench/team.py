@@ -234,7 +234,7 @@ async def idle_cpu(
         if cli is not None:
             ps = [await _wall(["ps"], team.tool_env, size + 1) for _ in range(3)]
             call = [
-                await _wall(["call", "m000", "echo", '"x"'], team.tool_env, 2) for _ in range(3)
+                await _wall(["call", "m000", "echo", '"x"'], team.tool_env, 1) for _ in range(3)
             ]
             cli[f"ps_wall_s_{size}"] = round(statistics.median(ps), 3)
             cli["call_wall_s"] = round(statistics.median(call), 3)
