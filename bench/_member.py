@@ -13,6 +13,8 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+import zenoh
+
 from mover import RunTeam
 from mover.testing import serve_programs
 
@@ -37,7 +39,9 @@ async def bench_or(robot: None, team: RunTeam, rounds: int) -> list[list[Any]]:
 async def bench_raw_or(robot: None, team: RunTeam, rounds: int) -> list[list[Any]]:
     """The floor of an OR step, without mover: the winner's one zenoh put to every member, and
     each member cancelling its operation when the put arrives (handed into its loop). The
-    rounds are kept in step by an untimed mover AND between them."""
+    rounds are kept in step by an untimed mover AND between them. The put is as reliable as
+    mover's own OR announcement (congestion control BLOCK): zenoh's default, DROP, lost it
+    under load once, and the members disagreed on the winner."""
     session = team.node.zenoh_session
     loop = asyncio.get_running_loop()
     got: asyncio.Queue[tuple[str, str]] = asyncio.Queue()
@@ -60,7 +64,11 @@ async def bench_raw_or(robot: None, team: RunTeam, rounds: int) -> list[list[Any
             ) -> None:
                 await asyncio.sleep(0.005 if team.me == winner else 10.0)
                 finished[0] = time.time()
-                session.put(f"bench/raw-or/{k}", team.me.encode())
+                session.put(
+                    f"bench/raw-or/{k}",
+                    team.me.encode(),
+                    congestion_control=zenoh.CongestionControl.BLOCK,
+                )
 
             task = asyncio.ensure_future(op())
             while True:

@@ -1,7 +1,8 @@
 """Idle cost and load tolerance of a team of member processes, in both topologies.
 
     python bench/team.py [--members 50] [--seconds 60] [--idle-seconds 10]
-                         [--call-timeout 5] [--stress K] [--lease-ms MS] [--parts idle,load]
+                         [--call-timeout 5] [--stress K] [--lease-ms MS]
+                         [--parts robot,idle,load]
 
 (a) Idle CPU: 10 and ``--members`` member processes (plain nodes exporting one procedure) are
 started in the topology ``mover up`` picks for that many (``mover._up.needs_router``: a peer
@@ -10,6 +11,12 @@ the whole team (readiness by membership), the CPU time of every process of the t
 and router, from /proc) is read over a fixed window of ``--idle-seconds``: ``idle_cpu_N`` in
 CPU-s per s in the picked topology, ``idle_cpu_N_other`` in the other one and
 ``idle_ratio_N = idle_cpu_N / idle_cpu_N_other`` (measured in the same run).
+
+With the 10 members, ``ps_wall_s_10`` and ``call_wall_s``: the wall time of ``mover ps`` and of
+``mover call m000 echo`` run as a user runs them (a new process each; median of three).
+
+(r) ``robot_rss_mb``: the RSS of a ``mover robot`` process (``python -m robots``) in a lock-step
+world, after its first ticks.
 
 (b) Load: ``--members`` members in the picked topology, each calling random others in a loop
 (one call in flight, a bounded ``--call-timeout``) for ``--seconds``. ``lost_replies_N``: calls
@@ -120,6 +127,7 @@ class Processes:
         self.names = [f"m{i:03d}" for i in range(size)]
         self.members: dict[str, asyncio.subprocess.Process] = {}
         self.hub: asyncio.subprocess.Process | None = None
+        self.tool_env: dict[str, str] = {}
 
     @property
     def label(self) -> str:
@@ -133,6 +141,8 @@ class Processes:
         team, port = TeamCredentials.generate("bench"), free_port()
         seed = f"tcp/127.0.0.1:{port}"
         base = {**self.env, **team.env()}
+        mode = "client" if self.router else "peer"  # how a tool reaches this team
+        self.tool_env = {**base, **NodeConfig(mode=mode, listen=(), connect=(seed,)).env()}
         if self.router:
             self.hub = await _spawn(
                 [sys.executable, "-m", "mover", "router", "--listen", seed], base
@@ -207,8 +217,11 @@ def cpu_seconds(pids: list[int]) -> float:
     return total / TICK
 
 
-async def idle_cpu(size: int, router: bool, window: float, env: dict[str, str]) -> float:
-    """CPU-s per s of a ready, idle team of ``size`` members over ``window`` seconds."""
+async def idle_cpu(
+    size: int, router: bool, window: float, env: dict[str, str], cli: dict[str, float] | None = None
+) -> float:
+    """CPU-s per s of a ready, idle team of ``size`` members over ``window`` seconds; with
+    ``cli``, then the wall time of ``mover ps`` and ``mover call`` on it (median of three)."""
     team = Processes(size, router, env)
     try:
         await team.start()
@@ -218,6 +231,14 @@ async def idle_cpu(size: int, router: bool, window: float, env: dict[str, str]) 
         used = cpu_seconds(team.pids()) - before
         rate = used / (time.monotonic() - t0)
         flaps = sum(len(r["left"]) for r in await team.ask("report"))
+        if cli is not None:
+            ps = [await _wall(["ps"], team.tool_env, size + 1) for _ in range(3)]
+            call = [
+                await _wall(["call", "m000", "echo", '"x"'], team.tool_env, 1) for _ in range(3)
+            ]
+            cli[f"ps_wall_s_{size}"] = round(statistics.median(ps), 3)
+            cli["call_wall_s"] = round(statistics.median(call), 3)
+            print(f"mover ps, {size} members: {ps} s; mover call: {call} s", flush=True)
         print(
             f"idle, {size:3d} members, {team.label:>6}: {rate:.3f} CPU-s/s "
             f"({rate / size * 1000:.1f} ms/s a member; {flaps} leave events)",
@@ -226,6 +247,37 @@ async def idle_cpu(size: int, router: bool, window: float, env: dict[str, str]) 
         return rate
     finally:
         await team.stop()
+
+
+async def _wall(verb: list[str], env: dict[str, str], lines: int) -> float:
+    """Wall seconds of ``mover VERB`` (a fresh process, as a user types it); it must succeed
+    and print at least ``lines`` lines."""
+    t0 = time.perf_counter()
+    proc = await asyncio.create_subprocess_exec(
+        sys.executable, "-m", "mover", *verb, env=env, cwd=ROOT,
+        stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.PIPE,
+    )  # fmt: skip
+    out, err = await asyncio.wait_for(proc.communicate(), 60)
+    wall = time.perf_counter() - t0
+    if proc.returncode or len(out.splitlines()) < lines:
+        raise RuntimeError(f"mover {' '.join(verb)} failed: {err.decode()[-300:]}")
+    return wall
+
+
+async def robot_rss(env: dict[str, str]) -> float:
+    """RSS in MB of a ``mover robot`` process (``python -m robots``) in a lock-step world,
+    after its first ticks (its pose read through the world)."""
+    from mover.testing import cluster
+
+    async with cluster() as c, c.launcher() as node:
+        await c.world(str(ROOT / "worlds" / "search_and_rescue.toml"), expect=1)
+        [proc] = await c.robots("ernst")
+        await node.membership.wait_for(["world", "ernst"], timeout=30)
+        await node.call("ernst", "robot.pose", timeout=10)
+        await asyncio.sleep(1.0)
+        status = Path(f"/proc/{proc.pid}/status").read_text()
+        kb = int(next(x for x in status.splitlines() if x.startswith("VmRSS")).split()[1])
+    return kb / 1024
 
 
 async def load(
@@ -290,10 +342,15 @@ async def main(args: argparse.Namespace) -> dict[str, Any]:
     if args.lease_ms:
         out["lease_ms"] = args.lease_ms
     parts = set(args.parts.split(","))
+    if "robot" in parts:
+        rss = await robot_rss(env)
+        out["robot_rss_mb"] = round(rss, 1)
+        print(f"a robot process in a lock-step world: {rss:.1f} MB RSS", flush=True)
     if "idle" in parts:
         for size in sorted({10, args.members}):
             picked = needs_router(size)
-            mine = await idle_cpu(size, picked, args.idle_seconds, env)
+            cli = out if size == 10 else None
+            mine = await idle_cpu(size, picked, args.idle_seconds, env, cli)
             try:
                 other: float | None = await idle_cpu(size, not picked, args.idle_seconds, env)
             except (RuntimeError, TimeoutError) as exc:  # a 50-peer mesh may never assemble
@@ -322,7 +379,9 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--call-timeout", type=float, default=5.0, help="a call's bound (default 5)")
     p.add_argument("--stress", type=int, default=0, help="busy-loop processes during the load")
     p.add_argument("--lease-ms", type=int, default=0, help="MOVER_LEASE_MS for every member")
-    p.add_argument("--parts", default="idle,load", help="idle, load or both (default)")
+    p.add_argument(
+        "--parts", default="robot,idle,load", help="robot, idle, load (default: all three)"
+    )
     p.add_argument(
         "--topology",
         choices=("auto", "peer", "router"),

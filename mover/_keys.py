@@ -4,7 +4,11 @@
 ``mover/<team>/ctl/<robot>``     control messages to a robot, e.g. cancelling a call
 ``mover/<team>/hello/<robot>``   authenticated member information (queryable)
 ``mover/<team>/alive/<robot>``   a member's liveliness token
-``mover/<team>/bc/<topic>``      team broadcasts (range-limited or team-wide)
+``mover/<team>/bc/<topic>``      team broadcasts (team-wide, or range-limited when not in a cell)
+``mover/<team>/bcc/<level>/<ix>_<iy>/<topic>``  range-limited broadcasts sent from one cell of
+                                 the grid of level ``level`` (cells of 2**level metres)
+``mover/<team>/bcl/<level>/<robot>/<topic>``    a sender's liveliness token: it sends ``topic``
+                                 into cells of that level
 """
 
 from __future__ import annotations
@@ -51,6 +55,19 @@ def alive(team: str, robot: str) -> str:
 
 def broadcast(team: str, topic: str) -> str:
     return f"{ROOT}/{team}/bc/{topic}"
+
+
+def broadcast_cell(team: str, level: int | str, cell: str, topic: str) -> str:
+    return f"{ROOT}/{team}/bcc/{level}/{cell}/{topic}"
+
+
+def broadcast_level(team: str, level: int | str, robot: str, topic: str) -> str:
+    return f"{ROOT}/{team}/bcl/{level}/{robot}/{topic}"
+
+
+def level_of(key: str) -> int:
+    """The level in a ``bcl`` key."""
+    return int(key.split("/")[3])
 
 
 def robot_of(key: str) -> str:

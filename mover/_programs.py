@@ -149,9 +149,9 @@ class ProgramHost:
         #: The hardware's clock for reproducible runs (None: no hardware, or none yet); the
         #: robot process sets it when the hardware connects.
         self.clock: RunClock | None = None
-        self.programs = dict(programs)
+        self.programs = programs  # not copied: a lazy mapping loads a program when it is asked
         self.collectives = Collectives(node, policy)
-        self._signatures = {name: _args_signature(fn) for name, fn in self.programs.items()}
+        self._signatures: dict[str, Signature] = {}
         self.runs: dict[str, _Run] = {}  # the last HISTORY runs, oldest first
         self._engaged: RunClock | None = None  # the clock the runs here engaged
         self._engaging = asyncio.Lock()
@@ -206,7 +206,7 @@ class ProgramHost:
         if len(busy) >= HISTORY:
             raise Refused(f"{self.node.name!r} has {len(busy)} runs under way: no more")
         try:
-            positional, kwargs = self._signatures[program].bind([], args)
+            positional, kwargs = self._signature(program).bind([], args)
         except TypeError as exc:
             raise BadArguments(f"program {program!r}: {exc}") from None
         self.collectives.set_policy(run, policy)
@@ -406,7 +406,17 @@ class ProgramHost:
 
     def installed(self) -> dict[str, str]:
         """The installed programs and their arguments."""
-        return {name: sig.describe() for name, sig in self._signatures.items()}
+        out = {}
+        for name in self.programs:
+            with contextlib.suppress(KeyError):  # a program that does not load is left out
+                out[name] = self._signature(name).describe()
+        return out
+
+    def _signature(self, name: str) -> Signature:
+        sig = self._signatures.get(name)
+        if sig is None:
+            sig = self._signatures[name] = _args_signature(self.programs[name])
+        return sig
 
 
 def _args_signature(fn: Callable[..., Any]) -> Signature:

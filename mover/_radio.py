@@ -19,23 +19,30 @@ from __future__ import annotations
 
 import asyncio
 import math
+import os
 import random
 import time
 from collections import deque
 from collections.abc import AsyncIterator
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol, cast
 
 import zenoh
 
-from . import _keys
+from . import _cells, _keys
 from ._bridge import sample_size
+from ._cells import CellSet, Undeclarable
 from ._exceptions import PayloadTooLarge, WireError
 from ._wire import SessionUnknown, broadcast_frames, pack, read_broadcast
 
 if TYPE_CHECKING:
     from ._membership import Membership
     from ._session import SessionState
+
+
+PUBLISHERS = 64  # publishers kept per node (cells visited, topics), least recently used dropped
+SETTLE = 1.0  # seconds a new publisher sends before its matching status is trusted
+FOLLOW = 0.1  # seconds between checks of a listening node's cell subscriptions
 
 
 class Locator(Protocol):
@@ -242,17 +249,37 @@ class Radio:
         self._neighbours.pop(name, None)
 
 
+class _Topic:
+    """One subscribed topic: its subscriptions and the zenoh subscribers behind them."""
+
+    def __init__(self) -> None:
+        self.subs: list[Subscription] = []
+        self.declared: list[Undeclarable] = []  # team-wide key, level tokens' subscriber
+        self.cells: CellSet | None = None
+
+
 class PubSub:
-    """A node's broadcasts and subscriptions (see the module)."""
+    """A node's broadcasts and subscriptions (see the module).
+
+    Range-limited broadcasts go under their sender's cell (:mod:`mover._cells`) unless ``cells``
+    is False (the environment variable ``MOVER_RADIO_CELLS=off``): then every broadcast goes
+    under the topic's team-wide key and every receiver opens every frame, as a flat team does; a
+    flat receiver still hears cell senders and the other way round. Nothing is sealed or sent
+    under a key that no subscriber has matched for :data:`SETTLE` seconds.
+    """
 
     def __init__(self, state: SessionState, radio: Radio, team: Membership) -> None:
         self.state = state
         self.radio = radio
         self.team = team
-        self._subs: dict[str, tuple[zenoh.Subscriber[None], list[Subscription]]] = {}
-        self._publishers: dict[tuple[str, bool, bool], zenoh.Publisher] = {}
-        self._outbox: dict[tuple[str, bool, bool], list[bytes]] = {}
+        self.cells = os.environ.get("MOVER_RADIO_CELLS", "on") != "off"
+        self._topics: dict[str, _Topic] = {}
+        self._publishers: dict[tuple[str, bool, bool], tuple[zenoh.Publisher, float]] = {}
+        self._outbox: dict[tuple[str, str, bool, bool], list[bytes]] = {}
+        # (topic, level) -> the liveliness token saying this node sends there, and since when
+        self._levels: dict[tuple[str, int], tuple[zenoh.LivelinessToken, float]] = {}
         self._flush_scheduled = False
+        self._follow_timer: asyncio.TimerHandle | None = None
 
     def broadcast(
         self, topic: str, data: Any, range: float | None, reliable: bool, express: bool
@@ -265,14 +292,33 @@ class PubSub:
         item = pack([data, list(where) if where else None, range])
         if len(item) > self.state.sealer.max_size // 2:
             raise PayloadTooLarge(f"broadcast of {len(item)} bytes is over the limit")
-        box = self._outbox.get((topic, reliable, express))
+        key = self._key(topic, range, where)
+        box = self._outbox.get((key, topic, reliable, express))
         if box is None:
             _keys.check_topic(topic)
-            box = self._outbox[(topic, reliable, express)] = []
+            box = self._outbox[(key, topic, reliable, express)] = []
         box.append(item)
         if not self._flush_scheduled:
             self._flush_scheduled = True
             asyncio.get_running_loop().call_soon(self.flush)
+
+    def _key(self, topic: str, reach: float | None, where: Any) -> str:
+        """The key a broadcast goes under: its sender's cell, or the topic's team-wide key."""
+        team = self.state.team
+        lvl = None if reach is None or where is None or not self.cells else _cells.level(reach)
+        if lvl is None:
+            return _keys.broadcast(team, topic)
+        token = self._levels.get((topic, lvl))
+        if token is None:
+            _keys.check_topic(topic)
+            key = _keys.broadcast_level(team, lvl, self.state.name, topic)
+            token = self._levels[(topic, lvl)] = (
+                self.state.session().liveliness().declare_token(key),
+                time.monotonic(),
+            )
+        if time.monotonic() - token[1] < _cells.GRACE:
+            return _keys.broadcast(team, topic)
+        return _keys.broadcast_cell(team, lvl, _cells.cell_of(where[0], where[1], lvl), topic)
 
     def flush(self) -> None:
         """Send what was queued (at the end of the turn, or as the node closes)."""
@@ -280,50 +326,112 @@ class PubSub:
         state = self.state
         if not state.is_open:
             return
+        self.follow()
         outbox, self._outbox = self._outbox, {}
-        for (topic, reliable, express), items in outbox.items():
-            pub = self._publisher(topic, reliable, express)
+        for (key, topic, reliable, express), items in outbox.items():
+            pub = self._publisher(key, reliable, express)
+            if pub is None:
+                state.stats["unheard.bc"] += len(items)
+                continue
             for frame in broadcast_frames(state.sealer, topic, items):
                 pub.put(frame)
                 state.stats["sent.bc_frames"] += 1
             state.stats["sent.bc"] += len(items)
 
-    def _publisher(self, topic: str, reliable: bool, express: bool) -> zenoh.Publisher:
-        pub = self._publishers.get((topic, reliable, express))
-        if pub is None:
+    def _publisher(self, key: str, reliable: bool, express: bool) -> zenoh.Publisher | None:
+        """The publisher for ``key``, or None if no subscriber has matched it for a while."""
+        entry = self._publishers.pop((key, reliable, express), None)
+        if entry is None:
             congestion = zenoh.CongestionControl.BLOCK if reliable else zenoh.CongestionControl.DROP
             pub = self.state.session().declare_publisher(
-                _keys.broadcast(self.state.team, topic),
-                congestion_control=congestion,
-                express=express,
+                key, congestion_control=congestion, express=express
             )
-            self._publishers[(topic, reliable, express)] = pub
-        return pub
+            entry = (pub, time.monotonic())
+            if len(self._publishers) >= PUBLISHERS:  # the least recently used goes
+                oldest = next(iter(self._publishers))
+                self._publishers.pop(oldest)[0].undeclare()
+        self._publishers[(key, reliable, express)] = entry  # most recently used last
+        pub, since = entry
+        # the stub says matching_status() -> bool; zenoh 1.10 has a property with .matching
+        if time.monotonic() - since < SETTLE or cast(Any, pub).matching_status.matching:
+            return pub
+        return None
 
     def subscribe(self, topic: str, maxlen: int) -> Subscription:
-        """A new subscription to ``topic`` (one zenoh subscriber per topic, shared)."""
+        """A new subscription to ``topic`` (one set of zenoh subscribers per topic, shared)."""
         _keys.check_topic(topic)
         sub = Subscription(topic, maxlen, self._unsubscribe)
-        entry = self._subs.get(topic)
+        entry = self._topics.get(topic)
         if entry is None:
-            zsub = self.state.session().declare_subscriber(
-                _keys.broadcast(self.state.team, topic),
-                self.state.door().callback(self.on_frame, droppable=True, size=sample_size),
-            )
-            entry = (zsub, [])
-            self._subs[topic] = entry
-        entry[1].append(sub)
+            entry = self._topics[topic] = self._declare(topic)
+        entry.subs.append(sub)
         return sub
 
+    def _declare(self, topic: str) -> _Topic:
+        session, door, team = self.state.session(), self.state.door(), self.state.team
+        on_frame = door.callback(self.on_frame, droppable=True, size=sample_size)
+        entry = _Topic()
+        entry.declared.append(session.declare_subscriber(_keys.broadcast(team, topic), on_frame))
+        if not self.cells:  # every cell of every level
+            key = _keys.broadcast_cell(team, "*", "*", topic)
+            entry.declared.append(session.declare_subscriber(key, on_frame))
+            return entry
+
+        def declare(lvl: int, cell: str) -> Undeclarable:
+            key = _keys.broadcast_cell(team, lvl, cell, topic)
+            return session.declare_subscriber(key, on_frame)
+
+        cells = entry.cells = CellSet(declare)
+
+        def on_token(sample: zenoh.Sample) -> None:
+            if sample.kind == zenoh.SampleKind.PUT and self._topics.get(topic) is entry:
+                cells.add_level(_keys.level_of(str(sample.key_expr)), self._where())
+                self._follow_soon()
+
+        key = _keys.broadcast_level(team, "*", "*", topic)
+        entry.declared.append(
+            session.liveliness().declare_subscriber(key, door.callback(on_token), history=True)
+        )
+        return entry
+
+    def _where(self) -> tuple[float, float] | None:
+        where = self.radio.position()
+        return None if where is None else (where[0], where[1])
+
+    def follow(self) -> None:
+        """Move the cell subscriptions to where this node is now."""
+        where = self._where()
+        for entry in self._topics.values():
+            if entry.cells is not None:
+                entry.cells.follow(where)
+
+    def _follow_soon(self) -> None:
+        """Follow this node's moves every :data:`FOLLOW` seconds while it listens to cells."""
+        if self._follow_timer is None:
+            self._follow_timer = asyncio.get_running_loop().call_later(FOLLOW, self._on_timer)
+
+    def _on_timer(self) -> None:
+        self._follow_timer = None
+        if self.state.is_open and any(e.cells and e.cells.levels for e in self._topics.values()):
+            self.follow()
+            self._follow_soon()
+
     def _unsubscribe(self, sub: Subscription) -> None:
-        entry = self._subs.get(sub.topic)
-        if entry is None or sub not in entry[1]:
+        entry = self._topics.get(sub.topic)
+        if entry is None or sub not in entry.subs:
             return
-        entry[1].remove(sub)
-        if not entry[1]:
-            del self._subs[sub.topic]
-            if self.state.is_open:
-                entry[0].undeclare()
+        entry.subs.remove(sub)
+        if not entry.subs:
+            del self._topics[sub.topic]
+            self._undeclare(entry, self.state.is_open)
+
+    @staticmethod
+    def _undeclare(entry: _Topic, is_open: bool) -> None:
+        if entry.cells is not None:
+            entry.cells.close(is_open)
+        if is_open:
+            for declared in entry.declared:
+                declared.undeclare()
 
     def on_frame(self, sample: zenoh.Sample) -> None:
         """A broadcast frame arrived (on the loop)."""
@@ -344,22 +452,26 @@ class PubSub:
             state.stats["refused"] += 1
             state.faults.warn("bc", f"dropped a broadcast on {sample.key_expr}: {exc}")
             return
-        entry = self._subs.get(topic)
+        entry = self._topics.get(topic)
         if entry is None:
             return
         messages = self.radio.receive_all(env.sender, topic, items, env.timestamp)
         if messages:
-            for sub in entry[1]:
+            for sub in entry.subs:
                 sub._put(messages)
         state.stats["recv.bc"] += len(messages)
 
     def close(self) -> None:
         """Send what is queued, then close every subscription."""
         self.flush()
-        for _, subs in list(self._subs.values()):
-            for sub in list(subs):
+        if self._follow_timer is not None:
+            self._follow_timer.cancel()
+            self._follow_timer = None
+        for entry in list(self._topics.values()):
+            for sub in list(entry.subs):
                 sub.close()
 
     def closed(self) -> None:
-        """The session is gone: forget its publishers."""
+        """The session is gone: forget its publishers and level tokens."""
         self._publishers.clear()
+        self._levels.clear()

@@ -19,4 +19,5 @@ def installed() -> dict[str, Callable[..., Any]]:
     """The installed programs by the name they are started by (``mover.programs``), loaded."""
     from robots.process import installed_programs
 
-    return installed_programs()
+    found = installed_programs()  # loads each one when asked: ask for every one
+    return {name: fn for name in found if (fn := found.get(name)) is not None}

@@ -22,7 +22,7 @@ import asyncio
 import contextlib
 import logging
 import math
-from collections.abc import AsyncIterator, Callable, Mapping
+from collections.abc import AsyncIterator, Callable, Iterator, Mapping
 from importlib.metadata import EntryPoint, entry_points
 from typing import Any
 
@@ -72,15 +72,35 @@ def load_backend(
     return backend
 
 
-def installed_programs() -> dict[str, Callable[..., Any]]:
-    """The installed programs (``mover.programs`` entry points), loaded."""
-    found = {}
-    for ep in entry_points(group="mover.programs"):
-        try:
-            found[ep.name] = ep.load()
-        except Exception as exc:  # one broken program must not stop the robot
-            log.warning("program %r is unavailable: %s", ep.name, exc)
-    return found
+class InstalledPrograms(Mapping[str, Callable[..., Any]]):
+    """The installed programs (``mover.programs`` entry points), each loaded when first asked
+    for: a robot process imports the libraries of the programs it runs, not of every one."""
+
+    def __init__(self) -> None:
+        self._eps = {ep.name: ep for ep in entry_points(group="mover.programs")}
+        self._loaded: dict[str, Callable[..., Any]] = {}
+
+    def __getitem__(self, name: str) -> Callable[..., Any]:
+        fn = self._loaded.get(name)
+        if fn is None:
+            ep = self._eps[name]  # KeyError: not installed
+            try:
+                fn = self._loaded[name] = ep.load()
+            except Exception as exc:  # one broken program must not stop the robot
+                log.warning("program %r is unavailable: %s", name, exc)
+                raise KeyError(name) from None
+        return fn
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._eps)
+
+    def __len__(self) -> int:
+        return len(self._eps)
+
+
+def installed_programs() -> Mapping[str, Callable[..., Any]]:
+    """The installed programs (``mover.programs`` entry points), loaded as they are asked for."""
+    return InstalledPrograms()
 
 
 async def run_robot(

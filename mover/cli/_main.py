@@ -25,14 +25,23 @@ __all__ = ["build_parser", "main"]
 log = logging.getLogger("mover.cli")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The full parser, with every verb that loads."""
+def build_parser(verb: str | None = None) -> argparse.ArgumentParser:
+    """The parser with verb ``verb`` only if it names one that loads (so that ``mover ps``
+    imports nothing of the worlds or experiments), else with every verb that loads."""
     parser = argparse.ArgumentParser(
         prog="mover", description="Program a team of mobile robots as one distributed program."
     )
     add_log_arguments(parser)
     sub = parser.add_subparsers(dest="verb", metavar="VERB", required=True)
-    for ep in sorted(entry_points(group="mover.commands"), key=lambda e: e.name):
+    verbs = sorted(entry_points(group="mover.commands"), key=lambda e: e.name)
+    for ep in verbs:
+        if ep.name == verb:
+            try:
+                ep.load()(sub)
+                return parser
+            except Exception:  # say so below, with the others
+                break
+    for ep in verbs:
         try:
             ep.load()(sub)
         except Exception as exc:  # one broken verb must not take the others down
@@ -40,9 +49,21 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _verb_in(argv: Sequence[str]) -> str | None:
+    """The verb ``argv`` names: its first word that is not an option or an option's value."""
+    words = iter(argv)
+    for word in words:
+        if word == "--log-level":
+            next(words, None)
+        elif not word.startswith("-"):
+            return word
+    return None
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``mover`` console script."""
-    parser = build_parser()
+    argv = list(sys.argv[1:] if argv is None else argv)
+    parser = build_parser(_verb_in(argv))
     args = parser.parse_args(argv)
     interrupt_on_sigterm()
     try:

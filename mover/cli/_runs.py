@@ -30,7 +30,16 @@ from . import (
     seed,
     team_from_args,
 )
-from ._verbs import NO_ANSWER, _listing, _on_team, _plain, _statuses, _team_options, observe
+from ._verbs import (
+    NO_ANSWER,
+    _listing,
+    _on_team,
+    _plain,
+    _statuses,
+    _team_options,
+    discover,
+    observe,
+)
 
 if TYPE_CHECKING:
     from .._node import Node
@@ -180,7 +189,7 @@ async def _run(
             if robots:
                 await node.membership.wait_for(robots, timeout=args.wait)
             else:
-                await asyncio.sleep(args.wait)
+                await discover(node, args.wait)
         except TimeoutError:
             missing = sorted(set(robots or ()) - node.membership.members())
             print(f"mover run: not in team {team.name!r}: {', '.join(missing)}", file=sys.stderr)
@@ -246,7 +255,7 @@ async def _find_run(
     node: Node, run: str, wait: float
 ) -> tuple[dict[str, dict[str, Any]], dict[str, list[dict[str, Any]] | str]]:
     """Who knows run ``run``: {member: its status of the run}, and every member's statuses."""
-    await asyncio.sleep(wait)
+    await discover(node, wait)
     names = sorted(
         n for n in node.membership.members() if (i := node.membership.info(n)) and i.kind != "tool"
     )

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import contextlib
 import json
 import logging
 import math
@@ -20,6 +21,7 @@ import time
 from collections.abc import Callable, Coroutine
 from typing import TYPE_CHECKING, Any
 
+from .. import _keys
 from .._config import NodeConfig, TeamCredentials
 from .._exceptions import CallError, NotDelivered, UnknownProcedure, WireError
 from .._keys import check_name
@@ -46,6 +48,7 @@ log = logging.getLogger("mover.cli")
 MAX_WAIT = 3600.0  # seconds a verb may be asked to wait for the team
 ECHO_QUEUE = 1000  # messages mover echo keeps unread at most
 STATUS_TIMEOUT = 3.0  # seconds a member has to answer mover.status
+SETTLE = 0.3  # seconds between a peer's queries for the team's members (see discover)
 NO_ANSWER = "(no answer)"
 NO_PROGRAMS = "-"  # a member that hosts no programs (a world, a tool)
 
@@ -57,7 +60,7 @@ def _team_options(p: argparse.ArgumentParser) -> None:
         type=bounded(float, 0.0, MAX_WAIT, above=True),
         default=2.0,
         metavar="S",
-        help="seconds to wait for the team to be discovered (default 2, at most 3600)",
+        help="seconds to wait at most for the team to be discovered (default 2, at most 3600)",
     )
 
 
@@ -128,18 +131,54 @@ async def _ps(team: TeamCredentials, config: NodeConfig, args: argparse.Namespac
 async def observe(
     team: TeamCredentials, config: NodeConfig, wait: float, tag: str
 ) -> tuple[list[Any], dict[str, list[dict[str, Any]] | str]]:
-    """The team's members as an observer (not a member) sees them after ``wait`` seconds, and
-    each one's ``mover.status`` (tools are not asked)."""
+    """The team's members as an observer (not a member) sees them, and each one's
+    ``mover.status`` (tools are not asked). Who is there comes from one liveliness query, then
+    each holder's hello; ``wait`` bounds both (a member that does not answer in time is left
+    out), nothing waits longer than they take."""
     from .._node import Node
 
     async with Node(
         f"{tag}-{secrets.token_hex(3)}", team, kind="tool", config=config, observer=True
     ) as node:
-        await asyncio.sleep(wait)
+        await discover(node, wait)
         infos = [node.membership.info(n) for n in sorted(node.membership.members())]
         rows = [i for i in infos if i is not None]
         statuses = await _statuses(node, [i.name for i in rows if i.kind != "tool"])
     return rows, statuses
+
+
+async def discover(node: Node, wait: float) -> None:
+    """Return once ``node`` knows every member there is now, or after ``wait`` seconds with
+    those it knows. Who is there: one liveliness query for the token holders (a router answers
+    for the whole team), then their hellos. A peer links to the other peers one by one as it
+    hears of them, and a query reaches only those it has linked to: as a peer, ask again until
+    the answer has held still for :data:`SETTLE` seconds."""
+    deadline = time.monotonic() + wait
+    holders = await alive(node, wait)
+    if node.config.mode != "client":
+        still = time.monotonic()
+        while (now := time.monotonic()) < deadline and now - still < SETTLE:
+            await asyncio.sleep(min(SETTLE / 3, deadline - now))
+            again = await alive(node, max(0.0, deadline - time.monotonic()))
+            if not again <= holders:
+                holders |= again
+                still = time.monotonic()
+    with contextlib.suppress(TimeoutError):
+        await node.membership.wait_for(holders, timeout=max(0.0, deadline - time.monotonic()))
+
+
+async def alive(node: Node, timeout: float) -> set[str]:
+    """The names of the token holders of ``node``'s team now: one liveliness query, bounded."""
+    from .._bridge import run_blocking
+
+    session, key = node.zenoh_session, _keys.alive(node.team_name, "*")
+
+    def ask() -> set[str]:
+        replies = session.liveliness().get(key, timeout=timeout)
+        return {_keys.robot_of(str(r.ok.key_expr)) for r in replies if r.ok is not None}
+
+    names: set[str] = await run_blocking(ask)
+    return names
 
 
 async def _statuses(node: Node, members: list[str]) -> dict[str, list[dict[str, Any]] | str]:
