@@ -338,7 +338,7 @@ async def main(args: argparse.Namespace) -> dict[str, Any]:
     env = dict(os.environ, PYTHONPATH=str(ROOT))
     if args.lease_ms:
         env["MOVER_LEASE_MS"] = str(args.lease_ms)
-    out: dict[str, Any] = {"lease_ms": NodeConfig.from_env().lease_ms}
+    out: dict[str, Any] = {"lease_ms": NodeConfig.from_env().lease}
     if args.lease_ms:
         out["lease_ms"] = args.lease_ms
     parts = set(args.parts.split(","))
