@@ -16,12 +16,13 @@ the same on every host: ``key_file`` or ``MOVER_TEAM_KEY``/``MOVER_TEAM_KEY_FILE
 
 from __future__ import annotations
 
+import ipaddress
+import re
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from .._config import NodeConfig
-from .._endpoints import check_endpoint
 from .._exceptions import ConfigError
 from .._keylines import Path as KeyPath
 from .._tables import BOOLEAN, NAME, STRING, Kind, Table, Wrong, hint, integer
@@ -47,14 +48,16 @@ class HostPlan:
     router: bool = False
 
 
+_HOSTNAME = re.compile(r"[A-Za-z0-9]([A-Za-z0-9.-]{0,251}[A-Za-z0-9])?\Z")
+
+
 def _address(value: object) -> str:
     text = STRING.check(value)
     try:
-        check_endpoint(f"tcp/{text}:1", "address")
-    except ConfigError:
-        raise Wrong(
-            f"must be a host name or an IP address ([::1] for IPv6), got {text!r}"
-        ) from None
+        ipaddress.ip_address(text)
+    except ValueError:
+        if not _HOSTNAME.match(text):
+            raise Wrong(f"must be a host name or an IP address, got {text!r}") from None
     return text
 
 
