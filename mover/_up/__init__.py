@@ -24,6 +24,7 @@ from .._exceptions import ConfigError
 from .._procs import ProcessExited
 from . import _hosts
 from ._plan import PEER_MESH_MAX, members, needs_router
+from ._program import run_program
 from ._supervisor import Stopped, Supervisor, UpError
 from ._teamfile import TeamFileError, TeamPlan, load_team
 
@@ -195,7 +196,7 @@ async def up(
             sup.say(f"ready in {took:.1f} s: {len(sup.children)} processes; join with "
                     f"{join_line(sup)}")  # fmt: skip
             if plan.program is not None and (host is None or sup.router):
-                ok = await sup.guard(sup.run_program())
+                ok = await sup.guard(run_program(sup))
                 if exit_after_run:
                     return 0 if ok else 1
             await sup.wait_stopped()

@@ -32,10 +32,10 @@ from types import TracebackType
 from typing import IO, Any, TypeVar
 
 from .._config import NodeConfig, TeamCredentials, free_port
-from .._exceptions import ConfigError, MoverError
+from .._exceptions import ConfigError
 from .._node import Node
 from .._procs import Child, ProcessExited, start, stop
-from .._programs import PROGRESS_TOPIC, launch
+from .._programs import launch
 from . import _hosts
 from ._plan import ProcessPlan, Seeds, processes, resolved, seeds, uses_router
 from ._teamfile import MAX_WAIT, SUPERVISOR, TeamPlan
@@ -364,49 +364,6 @@ class Supervisor:
             policy="survivors" if p is not None and p.survivors else "fail",
         )
 
-    async def run_program(self) -> bool:
-        """Start the file's program, print its progress and outcomes; True if every member
-        ended without error."""
-        p = self.plan.program
-        assert p is not None
-        members = list(p.members) or self.plan.robots()
-        progress = self.node.subscribe(f"{PROGRESS_TOPIC}/{p.run}")
-        t0 = time.monotonic()
-
-        async def show() -> None:
-            async for m in progress:
-                data = dict(m.data) if isinstance(m.data, dict) else {"data": m.data}
-                member, phase = data.pop("member", m.sender), data.pop("phase", "?")
-                extra = " ".join(f"{k}={_short(v)}" for k, v in data.items())
-                _line(f"[{p.run}] {time.monotonic() - t0:6.1f}s {member}: {phase} {extra}".rstrip())
-
-        shower = asyncio.create_task(show())
-        _line(f"[{p.run}] {p.name} on {', '.join(members)} (program seed {self.seeds.program})")
-        try:
-            outcomes = await self.launch(p.name, members, p.args, run=p.run)
-        except MoverError as exc:  # refused: an unknown program, bad arguments, a busy member
-            _line(f"[{p.run}] not started: {type(exc).__name__}: {exc}")
-            return False
-        finally:
-            await asyncio.sleep(0.1)  # the last progress reports
-            shower.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await shower
-            progress.close()
-        ok = True
-        for member, outcome in outcomes.items():
-            if "error" in outcome:
-                ok = False
-                _line(f"[{p.run}] {member}: FAILED {outcome['error']}")
-                for line in str(outcome.get("traceback") or "").rstrip().splitlines():
-                    _line(f"[{p.run}]   {line}")  # a bug in the program: where
-            else:
-                result = json.dumps(outcome.get("result"), default=str)
-                _line(f"[{p.run}] {member}: {result}")
-        took = time.monotonic() - t0
-        _line(f"[{p.run}] {'ended' if ok else 'FAILED'} after {took:.1f} s")
-        return ok
-
     # -- stopping ----------------------------------------------------------------------------------
 
     async def aclose(self) -> None:
@@ -484,11 +441,3 @@ def team_of(plan: TeamPlan) -> tuple[TeamCredentials, str]:
         except ValueError as exc:
             raise UpError(str(exc)) from None
     return TeamCredentials.generate(plan.name), "fresh"
-
-
-def _short(value: Any) -> str:
-    if isinstance(value, float):
-        return f"{value:.2f}"
-    if isinstance(value, list) and value and all(isinstance(v, float) for v in value):
-        return "[" + ", ".join(f"{v:.2f}" for v in value) + "]"
-    return str(value)
