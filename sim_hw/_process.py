@@ -85,12 +85,15 @@ def add_world_arguments(
 def ready_line(name: str, source: str, team: TeamCredentials, config: NodeConfig) -> str:
     """What a world process prints once it serves: where it is and how robots join it (the
     exact endpoints, ``:0`` resolved to the port zenoh chose, and the variables to set)."""
-    known = bound(config.listen) or list(config.connect)
+    given = config.overrides.get("connect/endpoints")  # a config file's (TLS)
+    known = bound(config.listen) or list(config.connect) or list(given or [])
     join = f"MOVER_TEAM={team.name}"
     if known:
         join += f" MOVER_CONNECT={','.join(known)}"
     if config.mode == "client":
         join += " MOVER_MODE=client"
+    if path := os.environ.get("MOVER_ZENOH_CONFIG"):
+        join += f" MOVER_ZENOH_CONFIG=<its own certificate's config> (this process: {path})"
     key_file = os.environ.get("MOVER_TEAM_KEY_FILE")
     key = "the team's key (MOVER_TEAM_KEY or MOVER_TEAM_KEY_FILE, as this process has it)"
     if key_file and not os.environ.get("MOVER_TEAM_KEY"):

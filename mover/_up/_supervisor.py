@@ -210,7 +210,7 @@ class Supervisor:
                     said = waited
                     home = _hosts.router_host(self.plan).name
                     home = f"mover up {self.plan.source} --host {home}"
-                    self.say(f"the router at {endpoint} does not answer yet ({exc}); "
+                    self.say(f"the router at {endpoint} does not answer yet; "
                              f"is `{home}` running? trying again")  # fmt: skip
                 await self.guard(asyncio.sleep(1.0))
 
