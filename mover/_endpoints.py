@@ -3,12 +3,16 @@
 Zenoh refuses a bad endpoint only when the session opens (``zenoh.ZError: invalid port value``,
 after whatever work came first); :func:`check_endpoint` says what is wrong in one line, naming
 the option it came from, and :func:`beyond_loopback_in_clear` finds the endpoints that other
-machines can reach without TLS.
+machines can reach without TLS. :func:`bound` names the port zenoh chose for ``:0``, and
+:func:`join_hint` tells a process that waits for the team what to check and what to set.
 """
 
 from __future__ import annotations
 
+import contextlib
 import ipaddress
+import os
+from collections.abc import Sequence
 
 from ._exceptions import ConfigError
 
@@ -82,3 +86,80 @@ def beyond_loopback_in_clear(endpoints: list[str]) -> list[str]:
             if not _is_loopback(host):
                 found.append(endpoint)
     return found
+
+
+def bound(endpoints: Sequence[str]) -> list[str]:
+    """``endpoints`` (this process's listen endpoints, checked) as others can reach them: a TCP
+    endpoint on port 0 gets the port this process listens on there (Linux: read from /proc);
+    one whose port cannot be found is left out."""
+    found = []
+    listening = _listening()
+    for endpoint in endpoints:
+        proto, address = _split(endpoint)
+        if proto != "tcp":
+            found.append(endpoint)
+            continue
+        host, port = _host_port(endpoint, address)
+        if port != 0:
+            found.append(endpoint)
+            continue
+        ports = listening.get(host.strip("[]"), [])
+        if ports:
+            where = f"[{host}]" if ":" in host else host
+            found.append(f"tcp/{where}:{ports.pop(0)}")
+    return found
+
+
+def _listening() -> dict[str, list[int]]:
+    """This process's listening TCP sockets: address -> ports ({} where /proc cannot say)."""
+    inodes = set()
+    try:
+        fds = os.listdir("/proc/self/fd")
+    except OSError:
+        return {}
+    for fd in fds:
+        with contextlib.suppress(OSError):
+            target = os.readlink(f"/proc/self/fd/{fd}")
+            if target.startswith("socket:["):
+                inodes.add(target[8:-1])
+    found: dict[str, list[int]] = {}
+    for table in ("tcp", "tcp6"):
+        try:
+            with open(f"/proc/self/net/{table}") as f:
+                rows = f.read().splitlines()[1:]
+        except OSError:
+            continue
+        for row in rows:
+            cells = row.split()
+            if len(cells) < 10 or cells[3] != "0A" or cells[9] not in inodes:  # 0A: LISTEN
+                continue
+            address, port = cells[1].split(":")
+            raw = bytes.fromhex(address)
+            # /proc writes each 32-bit word of the address in the host's (little-endian) order
+            words = b"".join(raw[i : i + 4][::-1] for i in range(0, len(raw), 4))
+            found.setdefault(str(ipaddress.ip_address(words)), []).append(int(port, 16))
+    return found
+
+
+def join_hint(*, team: str, connect: Sequence[str], linked: bool, awaited: str) -> str:
+    """What a process that waits for ``awaited`` (``"the world"``) of ``team`` should
+    check, said plainly: the endpoints it connects to (``MOVER_CONNECT``), whether it reached
+    anyone, and what to set."""
+    fix = (
+        f"set MOVER_CONNECT to the endpoint the READY line of {awaited} names, with its "
+        "MOVER_TEAM and team key (MOVER_TEAM_KEY or MOVER_TEAM_KEY_FILE)"
+    )
+    if not connect and not linked:
+        return f"this process connects to nothing (MOVER_CONNECT is not set) and no one came: {fix}"
+    if not connect:
+        return f"linked to no {awaited} yet (MOVER_CONNECT is not set): start it, or {fix}"
+    where = ",".join(connect)
+    if not linked:
+        return (
+            f"nothing answers at {where} (MOVER_CONNECT): is {awaited} (or its router) up? Or {fix}"
+        )
+    return (
+        f"linked at {where} (MOVER_CONNECT), but {awaited} is not in team {team!r} there: start "
+        "it, or check that MOVER_TEAM and the team key are the ones its READY line names (a "
+        "process with another key is not seen)"
+    )

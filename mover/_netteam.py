@@ -152,9 +152,11 @@ class TeamAcrossHosts:
         assert self.plan.world is not None
         self.out.mkdir(parents=True, exist_ok=True)
         tls = self.out / "tls"
-        names = [self.plan.world.name, *(m.name for m in self.plan.members), WORKSTATION]
+        names = [self.plan.world.name, *(m.name for m in self.plan.members)]
         a = self.lab[self.where["router"]]
-        await asyncio.to_thread(generate_config, tls, self.plan.name, names, a.address, ROUTER_PORT)
+        await asyncio.to_thread(
+            generate_config, tls, self.plan.name, names, a.address, ROUTER_PORT, [WORKSTATION]
+        )
         if self.proxied:  # the members' host joins through the proxy, in the router's host
             self.proxy = ImpairProxy((a.address, ROUTER_PORT), seed=self.seeds.run)
             await self.proxy.start((a.address, PROXY_PORT), netns=a.ns)

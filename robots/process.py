@@ -22,11 +22,13 @@ import asyncio
 import contextlib
 import logging
 import math
+import time
 from collections.abc import AsyncIterator, Callable, Iterator, Mapping
 from importlib.metadata import EntryPoint, entry_points
 from typing import Any
 
 from mover import Node, NodeConfig, ProgramHost, RunClock, TeamCredentials
+from mover._endpoints import join_hint
 from mover._futures import failure
 
 from ._robot import Robot
@@ -184,16 +186,29 @@ async def _serve(
 async def _connect(
     node: Node, backend: HardwareBackend[H], spec: Mapping[str, Any], options: Mapping[str, Any]
 ) -> H:
-    """Connect to the hardware, waiting (and saying so, once a minute) while it is away."""
-    waited = 0.0
+    """Connect to the hardware, waiting while it is away and saying so every
+    :data:`WAIT_SAY_EVERY` seconds: what is missing, where this process looks (its
+    ``MOVER_CONNECT``), whether it reached anyone, and what to set."""
+    said: float | None = None  # when it last said so
     while True:
         try:
             return await backend.connect(node, node.name, spec, **options)
         except HardwareLost as exc:
-            if waited % 60.0 == 0.0:
-                log.warning("%s: waiting for the hardware: %s", node.name, exc)
+            now = time.monotonic()
+            if said is None or now - said >= WAIT_SAY_EVERY:
+                said = now
+                hint = join_hint(
+                    team=node.team_name,
+                    connect=node.config.connect,
+                    linked=node.connected(),
+                    awaited="the world",
+                )
+                log.warning("%s: waiting for the hardware: %s; %s", node.name, exc, hint)
             await asyncio.sleep(1.0)
-            waited += 1.0
+
+
+WAIT_SAY_EVERY = 5.0
+"""Seconds between two lines of a robot that waits for its hardware."""
 
 
 class HostClock(RunClock):

@@ -17,10 +17,12 @@ from __future__ import annotations
 import argparse
 import asyncio
 import logging
+import os
 from collections.abc import Callable, Mapping
 from typing import Any, Protocol, TypeVar
 
 from mover import MoverError, Node, NodeConfig, TeamCredentials
+from mover._endpoints import bound
 from mover.cli import bounded, member_name, positive
 from sim_hw._frames import read_command, readings_frame, topics
 from sim_hw._lockstep import Command, LockstepDoor, RobotDropped
@@ -85,15 +87,23 @@ def add_world_arguments(
 
 
 def ready_line(name: str, source: str, team: TeamCredentials, config: NodeConfig) -> str:
-    """What a world process prints once it serves: where it is and how robots join it."""
-    # A listen endpoint on port 0 has a free port that zenoh does not tell: name the endpoints
-    # this process connects to instead (the router, say), which reach it as well.
-    known = [e for e in config.listen if not e.endswith(":0")] or list(config.connect)
-    where = ",".join(known)
-    join = f"MOVER_TEAM={team.name} MOVER_CONNECT={where}" if where else f"MOVER_TEAM={team.name}"
+    """What a world process prints once it serves: where it is and how robots join it (the
+    exact endpoints, ``:0`` resolved to the port zenoh chose, and the variables to set)."""
+    given = config.overrides.get("connect/endpoints")  # a config file's (TLS)
+    known = bound(config.listen) or list(config.connect) or list(given or [])
+    join = f"MOVER_TEAM={team.name}"
+    if known:
+        join += f" MOVER_CONNECT={','.join(known)}"
+    if config.mode == "client":
+        join += " MOVER_MODE=client"
+    if path := os.environ.get("MOVER_ZENOH_CONFIG"):
+        join += f" MOVER_ZENOH_CONFIG=<its own certificate's config> (this process: {path})"
+    key_file = os.environ.get("MOVER_TEAM_KEY_FILE")
+    key = "the team's key (MOVER_TEAM_KEY or MOVER_TEAM_KEY_FILE, as this process has it)"
+    if key_file and not os.environ.get("MOVER_TEAM_KEY"):
+        key = f"the team's key (MOVER_TEAM_KEY_FILE={key_file})"
     return (
-        f"READY {name}: serving {source} in team {team.name!r}; robots join with {join} "
-        f"and the team's key (MOVER_TEAM_KEY or MOVER_TEAM_KEY_FILE)"
+        f"READY {name}: serving {source} in team {team.name!r}; robots join with {join} and {key}"
     )
 
 

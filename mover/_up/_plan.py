@@ -12,10 +12,11 @@ import hashlib
 import json
 import secrets
 import sys
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
+from . import _hosts
 from ._teamfile import MemberPlan, TeamPlan, WorldPlan
 
 PEER_MESH_MAX = 12
@@ -70,6 +71,7 @@ class ProcessPlan:
     member: bool = True  # a team member (the router is not)
     ready_line: str | None = None
     stage: int = 2  # started in this order, stopped in the reverse: router 0, world 1, members 2
+    env: dict[str, str] = field(default_factory=dict)  # its own settings (across hosts)
 
 
 def members(plan: TeamPlan) -> int:
@@ -88,8 +90,14 @@ def _cli(*args: str) -> tuple[str, ...]:
     return (sys.executable, "-m", "mover._cli", *args)
 
 
-def processes(plan: TeamPlan, s: Seeds, run_dir: Path, *, port: int) -> list[ProcessPlan]:
-    """Every process of the team in start order: router, world, robots and workstations."""
+def processes(
+    plan: TeamPlan, s: Seeds, run_dir: Path, *, port: int, host: str | None = None
+) -> list[ProcessPlan]:
+    """Every process of the team in start order: router, world, robots and workstations (of a
+    team across hosts: those of ``host``, each with the settings that reach the router)."""
+    if plan.hosts:
+        assert host is not None
+        return _on_host(plan, s, run_dir, host)
     found: list[ProcessPlan] = []
     if uses_router(plan):
         found.append(
@@ -106,6 +114,22 @@ def processes(plan: TeamPlan, s: Seeds, run_dir: Path, *, port: int) -> list[Pro
         argv = world_argv(plan.world, s, run_dir)
         found.append(ProcessPlan(plan.world.name, argv, plan.world.required, stage=1))
     found += [ProcessPlan(m.name, member_argv(m), m.required) for m in plan.members]
+    return found
+
+
+def _on_host(plan: TeamPlan, s: Seeds, run_dir: Path, host: str) -> list[ProcessPlan]:
+    found: list[ProcessPlan] = []
+    if _hosts.router_host(plan).name == host:
+        argv = _cli(*_hosts.router_args(plan))
+        found.append(ProcessPlan("router", argv, True, member=False, ready_line="router ", stage=0))
+    w = plan.world
+    if w is not None and w.host == host:
+        env = _hosts.member_env(plan, w.name)
+        found.append(ProcessPlan(w.name, world_argv(w, s, run_dir), w.required, stage=1, env=env))
+    for m in plan.members:
+        if m.host == host:
+            env = _hosts.member_env(plan, m.name)
+            found.append(ProcessPlan(m.name, member_argv(m), m.required, env=env))
     return found
 
 

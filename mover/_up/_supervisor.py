@@ -32,10 +32,11 @@ from types import TracebackType
 from typing import IO, Any, TypeVar
 
 from .._config import NodeConfig, TeamCredentials, free_port
-from .._exceptions import MoverError
+from .._exceptions import ConfigError
 from .._node import Node
 from .._procs import Child, ProcessExited, start, stop
-from .._programs import PROGRESS_TOPIC, launch
+from .._programs import launch
+from . import _hosts
 from ._plan import ProcessPlan, Seeds, processes, resolved, seeds, uses_router
 from ._teamfile import MAX_WAIT, SUPERVISOR, TeamPlan
 
@@ -47,6 +48,8 @@ KILL_GRACE = 2.0
 """Seconds after SIGTERM before SIGKILL."""
 ROUTER_READY = 10.0
 """Seconds a router has to say it listens."""
+SAY_EVERY = 5.0
+"""Seconds between two lines saying what ``mover up`` waits for across hosts."""
 
 
 class UpError(Exception):
@@ -89,13 +92,33 @@ class Supervisor:
         echo: bool = True,
         signals: bool = True,
         log_level: str | None = None,
+        host: str | None = None,
     ) -> None:
         self.plan, self.out, self.echo, self.signals = plan, out, echo, signals
         self.log_level = log_level or plan.log_level or os.environ.get("MOVER_LOG_LEVEL")
         self.seeds: Seeds = seeds(plan, seed)
+        self.host = host
+        if plan.hosts and host is None:
+            raise UpError(f"{plan.source} places processes on hosts: say which with --host NAME")
         self.router = uses_router(plan)
         self.port = plan.port or free_port()
+        self.endpoint = f"tcp/127.0.0.1:{self.port}"
+        self.name = SUPERVISOR
+        if host is not None:
+            try:
+                mine = _hosts.host_of(plan, host)
+            except ConfigError as exc:
+                raise UpError(str(exc)) from None
+            self.router = _hosts.router_host(plan) == mine
+            self.port = _hosts.router_host(plan).port
+            self.endpoint = _hosts.endpoint(plan)
+            self.name = _hosts.supervisor(host)
         self.team, self.key_source = team_of(plan)
+        if host is not None and self.key_source == "fresh":
+            raise UpError(
+                f"a team across hosts needs one key on every host: key_file in [team] of "
+                f"{plan.source}, or MOVER_TEAM_KEY / MOVER_TEAM_KEY_FILE"
+            )
         self.node: Node = None  # type: ignore[assignment]  # set on entry
         self.children: list[_Child] = []
         self.t0 = time.monotonic()
@@ -126,7 +149,10 @@ class Supervisor:
         await self.aclose()
 
     async def _start(self) -> None:
-        procs = processes(self.plan, self.seeds, self.out, port=self.port)
+        try:
+            procs = processes(self.plan, self.seeds, self.out, port=self.port, host=self.host)
+        except ConfigError as exc:
+            raise UpError(str(exc)) from None
         self._width = max((len(p.name) for p in procs), default=0) + 2
         data = resolved(self.plan, self.seeds, procs, self.router)
         try:
@@ -141,8 +167,14 @@ class Supervisor:
             raise UpError(
                 f"cannot write the run folder {self.out}: {exc.strerror or exc}"
             ) from None
-        endpoint = f"tcp/127.0.0.1:{self.port}"
-        if self.router:
+        endpoint = self.endpoint
+        if self.host is not None:
+            theirs = NodeConfig(mode="client", listen=(), connect=(endpoint,))
+            try:
+                mine = _hosts.member_config(self.plan, self.name)
+            except ConfigError as exc:
+                raise UpError(str(exc)) from None
+        elif self.router:
             mine = NodeConfig(mode="client", listen=(), connect=(endpoint,))
             theirs = mine
         else:
@@ -156,13 +188,37 @@ class Supervisor:
                 asyncio.wait_for(router.said_ready.wait(), ROUTER_READY), "the router to listen"
             )
             rest = procs[1:]
-        self.node = Node(SUPERVISOR, self.team, kind="tool", config=mine)
-        try:
-            await self.node.open()
-        except Exception as exc:  # a port taken, an endpoint refused: zenoh's words, one line
-            raise UpError(f"cannot join the team on {endpoint}: {exc}") from None
+        self.node = Node(self.name, self.team, kind="tool", config=mine)
+        await self._join(endpoint)
         for p in rest:
             await self._spawn(p, env)
+
+    async def _join(self, endpoint: str) -> None:
+        """Open this process's node. Across hosts the router may not be up yet: try again
+        every second, saying so every :data:`SAY_EVERY` seconds, up to the ready bound."""
+        t0 = time.monotonic()
+        said = -SAY_EVERY
+        while True:
+            try:
+                await self.node.open()
+                return
+            except Exception as exc:  # a port taken, an endpoint refused: zenoh's words
+                waited = time.monotonic() - t0
+                if self.host is None or waited > self.ready_bound():
+                    raise UpError(f"cannot join the team on {endpoint}: {exc}") from None
+                if waited - said >= SAY_EVERY:
+                    said = waited
+                    home = _hosts.router_host(self.plan).name
+                    home = f"mover up {self.plan.source} --host {home}"
+                    self.say(f"the router at {endpoint} does not answer yet; "
+                             f"is `{home}` running? trying again")  # fmt: skip
+                await self.guard(asyncio.sleep(1.0))
+
+    def ready_bound(self) -> float:
+        """Seconds the team has to come up: the file's ``ready_timeout``, else 30 s and 2 s a
+        process."""
+        n = len(self.plan.members) + (self.plan.world is not None) + 1
+        return self.plan.ready_timeout or min(MAX_WAIT, 30.0 + 2.0 * n)
 
     def _env(self, config: NodeConfig) -> dict[str, str]:
         # the team's own key and endpoints, not those of a team this shell may be set up for
@@ -180,6 +236,7 @@ class Supervisor:
 
     async def _spawn(self, p: ProcessPlan, env: dict[str, str]) -> _Child:
         log = _open_log(self.out / f"{p.name}.log")
+        env = {**env, **p.env}
         try:  # its own session: a terminal's Ctrl-C is ours to pass on, in order
             process = await start(p.name, p.argv, env=env, log=log, pump=True, own_session=True)
         except OSError as exc:
@@ -263,11 +320,19 @@ class Supervisor:
         """Wait (bounded by the file's ``ready_timeout``) until every process of the team is a
         member; return the seconds it took. Raises :class:`UpError` naming who is missing."""
         names = [c.plan.name for c in self.children if c.plan.member]
-        bound = self.plan.ready_timeout or min(MAX_WAIT, 30.0 + 2.0 * len(self.children))
+        if self.host is not None:  # every host's processes: readiness is the whole team's
+            names = [m.name for m in self.plan.members]
+            names += [self.plan.world.name] if self.plan.world is not None else []
+        bound = self.ready_bound()
         try:
             await self.guard(self.node.membership.wait_for(names, timeout=bound))
         except TimeoutError:
             missing = sorted(set(names) - self.node.membership.members())
+            if self.host is not None:
+                on = {m.name: m.host for m in self.plan.members}
+                if self.plan.world is not None:
+                    on[self.plan.world.name] = self.plan.world.host
+                missing = [f"{n} (host {on[n]})" for n in missing]
             raise UpError(
                 f"not ready within {bound:g} s: {', '.join(missing)} "
                 f"did not join (see their logs in {self.out})"
@@ -299,49 +364,6 @@ class Supervisor:
             share=p is not None and p.share,
             policy="survivors" if p is not None and p.survivors else "fail",
         )
-
-    async def run_program(self) -> bool:
-        """Start the file's program, print its progress and outcomes; True if every member
-        ended without error."""
-        p = self.plan.program
-        assert p is not None
-        members = list(p.members) or self.plan.robots()
-        progress = self.node.subscribe(f"{PROGRESS_TOPIC}/{p.run}")
-        t0 = time.monotonic()
-
-        async def show() -> None:
-            async for m in progress:
-                data = dict(m.data) if isinstance(m.data, dict) else {"data": m.data}
-                member, phase = data.pop("member", m.sender), data.pop("phase", "?")
-                extra = " ".join(f"{k}={_short(v)}" for k, v in data.items())
-                _line(f"[{p.run}] {time.monotonic() - t0:6.1f}s {member}: {phase} {extra}".rstrip())
-
-        shower = asyncio.create_task(show())
-        _line(f"[{p.run}] {p.name} on {', '.join(members)} (program seed {self.seeds.program})")
-        try:
-            outcomes = await self.launch(p.name, members, p.args, run=p.run)
-        except MoverError as exc:  # refused: an unknown program, bad arguments, a busy member
-            _line(f"[{p.run}] not started: {type(exc).__name__}: {exc}")
-            return False
-        finally:
-            await asyncio.sleep(0.1)  # the last progress reports
-            shower.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await shower
-            progress.close()
-        ok = True
-        for member, outcome in outcomes.items():
-            if "error" in outcome:
-                ok = False
-                _line(f"[{p.run}] {member}: FAILED {outcome['error']}")
-                for line in str(outcome.get("traceback") or "").rstrip().splitlines():
-                    _line(f"[{p.run}]   {line}")  # a bug in the program: where
-            else:
-                result = json.dumps(outcome.get("result"), default=str)
-                _line(f"[{p.run}] {member}: {result}")
-        took = time.monotonic() - t0
-        _line(f"[{p.run}] {'ended' if ok else 'FAILED'} after {took:.1f} s")
-        return ok
 
     # -- stopping ----------------------------------------------------------------------------------
 
@@ -420,11 +442,3 @@ def team_of(plan: TeamPlan) -> tuple[TeamCredentials, str]:
         except ValueError as exc:
             raise UpError(str(exc)) from None
     return TeamCredentials.generate(plan.name), "fresh"
-
-
-def _short(value: Any) -> str:
-    if isinstance(value, float):
-        return f"{value:.2f}"
-    if isinstance(value, list) and value and all(isinstance(v, float) for v in value):
-        return "[" + ", ".join(f"{v:.2f}" for v in value) + "]"
-    return str(value)

@@ -2,8 +2,10 @@
 
 A team file is TOML with a ``[team]`` table (name, key, seed, topology), an optional
 ``[world]`` (a continuous or grid world process), arrays of tables ``[[robots]]`` and
-``[[workstations]]`` (groups of member processes) and an optional ``[program]`` to start once
-everyone is a member. It is read by :mod:`mover._tables`: every problem raises
+``[[workstations]]`` (groups of member processes), an optional ``[program]`` to start once
+everyone is a member, and optional ``[[hosts]]`` (the machines of a team across hosts, read by
+:mod:`._hosts`; the world and each group then say ``host = "..."``). It is read by
+:mod:`mover._tables`: every problem raises
 :class:`TeamFileError` naming the file, the line and what is wrong (``teams/x.toml:12:
 robots[1].count: must be from 1 to 200, got 1000``); unknown keys are refused with the known
 ones as a hint; every count and size is bounded where it is read. Paths in the file are
@@ -35,6 +37,7 @@ from .._tables import (
     toml_table,
     vector,
 )
+from ._hosts import HostPlan, placed, read_hosts
 
 MAX_FILE_BYTES = 2**20
 """The largest team file read."""
@@ -78,6 +81,7 @@ class WorldPlan:
     seed: int | None = None  # None: derived from the run seed
     required: bool = True
     control_delay: int = 0  # lock-step: a command for tick t applies at t + K (sim_hw._delayed)
+    host: str | None = None  # None: the one host (or, across hosts, the first)
 
 
 @dataclass(frozen=True)
@@ -91,6 +95,7 @@ class MemberPlan:
     spec: dict[str, Any] = field(default_factory=dict)
     options: dict[str, Any] = field(default_factory=dict)
     required: bool = False
+    host: str | None = None  # None: the one host (or, across hosts, the first)
 
 
 @dataclass(frozen=True)
@@ -119,6 +124,8 @@ class TeamPlan:
     log_level: str | None = None
     ready_timeout: float | None = None  # None: 30 s and 2 s a process (they start on few cores)
     patience: float | None = None  # None: $MOVER_PATIENCE, else NodeConfig's (10 s)
+    tls: Path | None = None  # the folder of `mover up --gen-config` (across hosts)
+    hosts: tuple[HostPlan, ...] = ()  # () : one machine
     world: WorldPlan | None = None
     members: tuple[MemberPlan, ...] = ()
     program: ProgramPlan | None = None
@@ -137,11 +144,12 @@ def load_team(path: str | Path) -> TeamPlan:
 def parse_team(text: str, path: Path) -> TeamPlan:
     """Check the TOML ``text`` of the team file at ``path``; raises :class:`TeamFileError`."""
     root = toml_table(text, str(path), TeamFileError)
-    root.only(("team", "world", "robots", "workstations", "program"))
+    root.only(("team", "world", "robots", "workstations", "program", "hosts"))
     team = root.table("team")
     if team is None:
         raise root.fail((), 'needs a [team] table (at least: name = "...")')
     plan = _team(team, path)
+    hosts = read_hosts(root)
     world = root.table("world")
     wplan = _world(world, path.parent) if world is not None else None
     members = _groups(root, wplan)
@@ -154,7 +162,8 @@ def parse_team(text: str, path: Path) -> TeamPlan:
         # every robot the file points at this world joins it, whatever its kind's backend
         expect = sum(m.hardware != "none" and m.world == wplan.name for m in members)
         wplan = replace(wplan, expect=expect)
-    return replace(plan, world=wplan, members=tuple(members), program=pplan)
+    plan = replace(plan, world=wplan, members=tuple(members), program=pplan, hosts=hosts)
+    return placed(plan, root)
 
 
 def _path(base: Path, text: str) -> Path:
@@ -183,9 +192,20 @@ _PATIENCE = number(low=0.1, high=3600.0, strict=False)
 
 def _team(t: Table, path: Path) -> TeamPlan:
     t.only(
-        ("name", "key_file", "seed", "topology", "port", "log_level", "ready_timeout", "patience")
+        (
+            "name",
+            "key_file",
+            "seed",
+            "topology",
+            "port",
+            "log_level",
+            "ready_timeout",
+            "patience",
+            "tls",
+        )
     )
     key_file = t.option("key_file", STRING)
+    tls = t.option("tls", STRING)
     level = t.option("log_level", _LEVEL)
     return TeamPlan(
         source=path,
@@ -197,12 +217,13 @@ def _team(t: Table, path: Path) -> TeamPlan:
         log_level=level,
         ready_timeout=t.option("ready_timeout", _WAIT),
         patience=t.option("patience", _PATIENCE),
+        tls=_path(path.parent, tls) if tls is not None else None,
     )
 
 
 _CONTINUOUS = ("lockstep", "speed", "record", "state_rate", "control_delay")
 _GRID = ("layout", "turns")
-_COMMON = ("kind", "file", "name", "timeout", "until", "expect", "seed", "required")
+_COMMON = ("kind", "file", "name", "timeout", "until", "expect", "seed", "required", "host")
 
 
 def _world(t: Table, base: Path) -> WorldPlan:
@@ -234,6 +255,7 @@ def _world(t: Table, base: Path) -> WorldPlan:
         seed=t.option("seed", _SEED),
         required=t.read("required", BOOLEAN, True),
         control_delay=t.read("control_delay", integer(low=0, high=100), 0),
+        host=t.option("host", NAME),
     )
 
 
@@ -260,12 +282,14 @@ def _groups(root: Table, world: WorldPlan | None) -> list[MemberPlan]:
 
 
 def _group(g: Table, world: WorldPlan | None, *, robot: bool) -> list[MemberPlan]:
-    g.only(_GROUP + _ROBOT if robot else _GROUP, kind="a robot group" if robot else None)
+    known = (*_GROUP, *_ROBOT, "host") if robot else (*_GROUP, "host")
+    g.only(known, kind="a robot group" if robot else None)
     names = _names(g)
     kind = g.read("kind", NAME, "robot" if robot else "workstation")
     required = g.read("required", BOOLEAN, False)
+    host = g.option("host", NAME)
     if not robot:
-        return [MemberPlan(n, kind, "none", required=required) for n in names]
+        return [MemberPlan(n, kind, "none", required=required, host=host) for n in names]
     default_hw = HARDWARE_OF[world.kind] if world is not None else "sim"
     hardware = g.read("hardware", NAME, default_hw)
     spec = g.read("spec", MAPPING, {})
@@ -285,6 +309,7 @@ def _group(g: Table, world: WorldPlan | None, *, robot: bool) -> list[MemberPlan
             spec={**spec, "pose": list(poses[i])} if poses else dict(spec),
             options=dict(options),
             required=required,
+            host=host,
         )
         for i, name in enumerate(names)
     ]

@@ -1,12 +1,14 @@
 """`mover router`: a zenoh router for multi-machine teams, and the config to secure it.
 
 A router is a Python zenoh session in router mode (no separate binary). ``--gen-config DIR``
-writes, for one team, a certificate authority, a router certificate and one client certificate
-per member (common name = member name), ``router.json`` (TLS listener, mutual TLS, and an
-access-control list that lets only the team's certificates touch ``mover/<team>/**``) and
-``member-<name>.json`` for each member (client mode, connecting over mutual TLS). A robot process
-uses its file through ``MOVER_ZENOH_CONFIG``; the team key (envelope signatures) still applies on
-top, so a member whose certificate leaks still cannot forge team messages.
+writes, for one team, a certificate authority, a router certificate, one client certificate per
+member (common name = member name) and per workstation (``--workstations``: tools such as
+``mover run``), ``router.json`` (TLS listener with a bounded handshake, mutual TLS, and the
+per-member access-control list of :mod:`._acl`: only ``<name>``'s certificate serves
+``<name>``'s keys) and ``member-<name>.json`` for each (client mode, connecting over mutual
+TLS). A process uses its file through ``MOVER_ZENOH_CONFIG``; the team key (envelope
+signatures) still applies on top, so a member whose certificate leaks still cannot forge team
+messages (docs/security.md).
 
 An ACL applies only in the node that has it (docs/transport.md). Robots behind the router should
 run as clients (``MOVER_MODE=client``) and listen on nothing, so that no outsider can link to them
@@ -23,6 +25,7 @@ import os
 import signal
 import sys
 import threading
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -30,6 +33,7 @@ from .._config import NodeConfig, _knobs_from_env, _read_overrides
 from .._endpoints import beyond_loopback_in_clear, check_endpoint
 from .._exceptions import ConfigError
 from .._keys import check_name
+from ._acl import team_acl
 
 DEFAULT_LISTEN = "tcp/127.0.0.1:7447"
 """Where a router without ``--listen`` or a config listens: this machine only."""
@@ -38,18 +42,17 @@ WIDE_LISTEN = "tcp/0.0.0.0:7447"
 CLOSE_BOUND = 10.0
 """Seconds a stopping router may take to close its session before it exits anyway."""
 
-# Every message kind a team member needs on the team's keys.
-_TEAM_MESSAGES = [
-    "put",
-    "delete",
-    "declare_subscriber",
-    "query",
-    "declare_queryable",
-    "reply",
-    "liveliness_token",
-    "liveliness_query",
-    "declare_liveliness_subscriber",
-]
+HANDSHAKE_TIMEOUT_MS = 1000
+"""Milliseconds the router gives a connection to finish its TLS handshake (zenoh's default is
+10 s). Zenoh's TLS listener handshakes at most 64 connections at a time, in the order they
+came; an idle connection holds its slot this long, so 1000 idle ones hold back a new member by
+about 1000 / 64 x this (docs/security.md has the measurement)."""
+TRANSPORT = {
+    "accept_timeout": 2000,  # zenoh's own handshake after TLS (default 10 s)
+    "accept_pending": 100,  # links in that handshake at once (zenoh's default)
+    "open_timeout": 10000,  # a member opening a link: long enough to wait out a queue
+}
+"""``transport/unicast`` settings written to the router's and the members' configs."""
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -69,7 +72,17 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.add_argument("--config", metavar="FILE", help="a JSON settings file (e.g. router.json)")
     p.add_argument("--gen-config", metavar="DIR", help="write certificates and configs to DIR")
     p.add_argument("--team", help="team name (with --gen-config)")
-    p.add_argument("--members", help="comma-separated member names (with --gen-config)")
+    p.add_argument(
+        "--members",
+        help="comma-separated names of the processes that serve a name of their own: robots, "
+        "worlds, workstation groups (with --gen-config)",
+    )
+    p.add_argument(
+        "--workstations",
+        default="",
+        help="comma-separated certificate names for tools (mover run, mover ps: fresh names, "
+        "never a member's) (with --gen-config)",
+    )
     p.add_argument(
         "--host",
         default="127.0.0.1",
@@ -88,6 +101,7 @@ def run(args: argparse.Namespace) -> int:
         try:
             check_name("team", args.team)
             members = [check_name("member", m) for m in args.members.split(",") if m]
+            tools = [check_name("workstation", m) for m in args.workstations.split(",") if m]
         except ValueError as exc:
             raise UsageError(str(exc)) from None
         if not 1 <= args.port <= 65535:
@@ -96,7 +110,7 @@ def run(args: argparse.Namespace) -> int:
         if target.exists() and not target.is_dir():
             raise UsageError(f"--gen-config {target}: exists and is not a directory")
         try:
-            written = generate_config(target, args.team, members, args.host, args.port)
+            written = generate_config(target, args.team, members, args.host, args.port, tools)
         except OSError as exc:
             raise UsageError(f"--gen-config {target}: {exc.strerror or exc}") from None
         for path in written:
@@ -177,15 +191,25 @@ def _exit_now() -> None:
 
 
 def generate_config(
-    directory: Path, team: str, members: list[str], host: str, port: int
+    directory: Path,
+    team: str,
+    members: list[str],
+    host: str,
+    port: int,
+    tools: Sequence[str] = (),
 ) -> list[Path]:
-    """Write a CA, certificates and router/member configs for ``team``; return the files."""
+    """Write a CA, certificates and router/member configs for ``team``; return the files.
+
+    One certificate per name of ``members`` (common name = the name: the processes that serve
+    that name, robots, worlds, workstation groups) and of ``tools`` (workstations running
+    ``mover run``, ``mover ps``: processes with fresh names). The ACL is :func:`team_acl`'s."""
+    tools = [t for t in tools if t not in members]
     directory.mkdir(parents=True, exist_ok=True)
     ca_key, ca_cert = _certificate(f"mover {team} CA", None, host, ca=True)
     files = {"ca.pem": _pem(ca_cert)}
     r_key, r_cert = _certificate("router", (ca_key, ca_cert), host)
     files["router-cert.pem"], files["router-key.pem"] = _pem(r_cert), _pem(r_key)
-    for member in members:
+    for member in [*members, *tools]:
         m_key, m_cert = _certificate(member, (ca_key, ca_cert), host)
         files[f"{member}-cert.pem"], files[f"{member}-key.pem"] = _pem(m_cert), _pem(m_key)
     written = []
@@ -197,32 +221,19 @@ def generate_config(
         written.append(path)
     d = directory.resolve()
     router = {
-        "listen/endpoints": [f"tls/{host}:{port}"],
+        "listen/endpoints": [router_endpoint(host, port)],
         "transport/link/tls": {
             "root_ca_certificate": str(d / "ca.pem"),
             "listen_certificate": str(d / "router-cert.pem"),
             "listen_private_key": str(d / "router-key.pem"),
             "enable_mtls": True,
         },
-        "access_control": {
-            "enabled": True,
-            "default_permission": "deny",
-            "rules": [
-                {
-                    "id": "team",
-                    "messages": _TEAM_MESSAGES,
-                    "flows": ["ingress", "egress"],
-                    "permission": "allow",
-                    "key_exprs": [f"mover/{team}/**"],
-                }
-            ],
-            "subjects": [{"id": "members", "cert_common_names": members}],
-            "policies": [{"id": "team", "rules": ["team"], "subjects": ["members"]}],
-        },
+        "transport/unicast": dict(TRANSPORT),
+        "access_control": team_acl(team, members, tools),
     }
     (directory / "router.json").write_text(json.dumps(router, indent=2))
     written.append(directory / "router.json")
-    for member in members:
+    for member in [*members, *tools]:
         client = {
             "connect/endpoints": [f"tls/{host}:{port}"],
             "listen/endpoints": [],
@@ -232,11 +243,18 @@ def generate_config(
                 "connect_private_key": str(d / f"{member}-key.pem"),
                 "enable_mtls": True,
             },
+            "transport/unicast": dict(TRANSPORT),
         }
         path = directory / f"member-{member}.json"
         path.write_text(json.dumps(client, indent=2))
         written.append(path)
     return written
+
+
+def router_endpoint(host: str, port: int) -> str:
+    """The router's TLS endpoint, with its handshake bound (:data:`HANDSHAKE_TIMEOUT_MS`)."""
+    where = f"[{host}]" if ":" in host else host
+    return f"tls/{where}:{port}#tls_handshake_timeout_ms={HANDSHAKE_TIMEOUT_MS}"
 
 
 def _certificate(

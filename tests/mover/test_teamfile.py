@@ -224,7 +224,7 @@ def test_the_command_line_says_one_line_for_a_bad_file(tmp_path: Path) -> None:
     assert done.stderr.strip().splitlines() == [
         f"mover up: {bad}:5: robots[0].cuont: unknown key in a robot group (did you mean "
         "'count'?); known: names, prefix, count, first, kind, required, hardware, world, spec, "
-        "options, poses, placement"
+        "options, poses, placement, host"
     ]
 
 
