@@ -12,6 +12,7 @@ passes ``locator`` to :func:`connect`: a function of the odometry that returns a
 reads the tracker's latest pose for this robot.
 """
 
+from ._behaviours import ProxWander, drive_to, wander_until
 from ._calibration import PROX_ANGLES, Calibration
 from ._devices import BUTTONS, Buttons, Ground, Leds, Proximity
 from ._hardware import MissingDevice, OdometryLocator, ThymioHardware, connect, require
@@ -26,7 +27,10 @@ __all__ = [
     "MissingDevice",
     "OdometryLocator",
     "Proximity",
+    "ProxWander",
     "ThymioHardware",
     "connect",
+    "drive_to",
     "require",
+    "wander_until",
 ]
