@@ -12,13 +12,16 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from typing import Protocol
+from typing import Protocol, TypeVar
 
 from robots._robot import Robot
-from robots.hal import Pose
+from robots.hal import Hardware, Pose
 from robots.library import steer
 
 __all__ = ["ProxWander", "drive_to", "wander_until"]
+
+
+HW = TypeVar("HW", bound=Hardware)
 
 
 class _Rng(Protocol):
@@ -64,7 +67,7 @@ class ProxWander:
 
 
 async def wander_until(
-    robot: Robot, done: Callable[[], bool], wander: ProxWander, *, timeout: float = 300.0
+    robot: Robot[HW], done: Callable[[], bool], wander: ProxWander, *, timeout: float = 300.0
 ) -> Pose | None:
     """Wander until ``done()`` (checked each tick); the pose then, or None after ``timeout``
     seconds."""
@@ -86,7 +89,7 @@ async def wander_until(
 
 
 async def drive_to(
-    robot: Robot,
+    robot: Robot[HW],
     target: tuple[float, float],
     *,
     speed: float = 0.1,

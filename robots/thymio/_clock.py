@@ -29,6 +29,7 @@ from ._devices import Readings
 
 __all__ = ["ThymioClock"]
 
+
 class ThymioClock:
     """``robots.hal.Clock`` over a Thymio (see the module docstring).
 

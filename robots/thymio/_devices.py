@@ -162,7 +162,7 @@ class Leds:
 
     def __init__(self) -> None:
         self.top_rgb = (0, 0, 0)
-        self.circle_levels = (0,) * 8
+        self.circle_levels: tuple[int, ...] = (0,) * 8
 
     def show(self, status: str) -> None:
         """Light the top LED with ``status``'s colour (see the class)."""
@@ -197,6 +197,10 @@ def colour_of(status: str) -> tuple[int, int, int]:
         except ValueError:
             pass
         else:
-            return ((rgb >> 16) * 32 // 255, ((rgb >> 8) & 255) * 32 // 255, (rgb & 255) * 32 // 255)
+            return (
+                (rgb >> 16) * 32 // 255,
+                ((rgb >> 8) & 255) * 32 // 255,
+                (rgb & 255) * 32 // 255,
+            )
     h = zlib.crc32(status.encode())
     return (8 + h % 25, 8 + (h >> 8) % 25, 8 + (h >> 16) % 25)

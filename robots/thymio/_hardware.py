@@ -21,10 +21,11 @@ from typing import Any
 
 from robots.hal import Hardware, HardwareLost, Pose, RadioLocator
 
+from . import _aseba as aseba
 from ._calibration import Calibration
 from ._clock import ThymioClock
 from ._devices import Buttons, Ground, Leds, Proximity, Readings, ThymioDrive, ThymioOdometry
-from ._link import Address, AsebaLink
+from ._link import HOST, Address, AsebaLink
 
 __all__ = ["ThymioHardware", "connect", "led_program", "require"]
 
@@ -140,8 +141,9 @@ class _Thymio:
             prox=var("prox.horizontal"),
             ground=(ground[0], ground[1]),
             speeds=(var("motor.left.speed")[0], var("motor.right.speed")[0]),
-            buttons=tuple(var(f"button.{b}")[0] for b in ("backward", "left", "center",
-                                                          "forward", "right")),  # fmt: skip
+            buttons=tuple(
+                var(f"button.{b}")[0] for b in ("backward", "left", "center", "forward", "right")
+            ),
         )
 
     def stop_now(self) -> None:
@@ -178,6 +180,9 @@ async def connect(
         drive, leds = ThymioDrive(cal), Leds()
         thymio = _Thymio(conn, cal, drive, leds, timeout)
         conn.load(led_program(conn, thymio.led_words))
+        conn.farewell = tuple(
+            aseba.set_variables(HOST, conn.node, conn.variables[name][0], (0,)) for name in DRIVEN
+        )
         thymio.stop_now()
         first = await thymio.exchange()
     except BaseException:

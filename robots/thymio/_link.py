@@ -77,14 +77,14 @@ class AsebaLink:
     Build it with :meth:`open`; ``variables`` maps each named variable to (offset, size).
     """
 
-    def __init__(
-        self, address: Address, reader: asyncio.StreamReader, writer: _Writer
-    ) -> None:
+    def __init__(self, address: Address, reader: asyncio.StreamReader, writer: _Writer) -> None:
         self.address = address
         self.node = -1
         self.name = ""
         self.variables: dict[str, tuple[int, int]] = {}
         self.table_size = 0
+        self.farewell: tuple[aseba.Message, ...] = ()
+        """Sent as the link is closed by this side (the process ending): stop the motors."""
         self.events: list[str] = []
         self.natives: list[str] = []
         self._reader = reader
@@ -112,7 +112,9 @@ class AsebaLink:
                 await link._handshake(node)
         except TimeoutError:
             await link.aclose()
-            raise HardwareLost(f"no Aseba node answered at {address} within {timeout:g} s") from None
+            raise HardwareLost(
+                f"no Aseba node answered at {address} within {timeout:g} s"
+            ) from None
         except BaseException:
             await link.aclose()
             raise
@@ -239,6 +241,12 @@ class AsebaLink:
             self._lose(exc)
         except (OSError, ValueError) as exc:
             self._lose(HardwareLost(f"the link to the Thymio at {self.address}: {_why(exc)}"))
+        except asyncio.CancelledError:
+            if self._lost is None:  # closed by this side, the robot still there: farewell
+                for msg in self.farewell:
+                    with contextlib.suppress(OSError, RuntimeError):
+                        self._writer.write(msg.encode())
+            raise
         finally:
             self._lose(HardwareLost(f"the link to the Thymio at {self.address} was closed"))
             self._writer.close()  # the stream ends with its reader
@@ -290,10 +298,8 @@ async def _open_stream(address: Address) -> tuple[asyncio.StreamReader, _Writer]
     # A serial device (the Thymio's USB CDC port, or the wireless dongle's): raw mode, no
     # baud rate to speak of; asyncio reads and writes character devices as pipes.
     fd = os.open(address.device, os.O_RDWR | os.O_NOCTTY | os.O_NONBLOCK)
-    try:
+    with contextlib.suppress(termios.error):  # not a terminal (a pipe): nothing to set
         tty.setraw(fd, termios.TCSANOW)
-    except termios.error:
-        pass  # not a terminal (a plain pipe in a test): nothing to set
     reader = asyncio.StreamReader()
     await loop.connect_read_pipe(
         lambda: asyncio.StreamReaderProtocol(reader), os.fdopen(fd, "rb", buffering=0)

@@ -1,4 +1,4 @@
-"""``python -m robots.thymio.calibrate``: measure a simulated Thymio's calibration in the Playground.
+"""``python -m robots.thymio.calibrate``: measure a simulated Thymio's calibration.
 
 Prints the figures ``robots.thymio.Calibration`` holds, measured against the world's geometry
 (the only ground truth the Aseba protocol leaves: the Playground does not tell poses):
@@ -17,6 +17,7 @@ Needs ``asebaplayground`` (Debian package ``aseba``); takes about 30 s.
 from __future__ import annotations
 
 import asyncio
+import itertools
 import math
 import statistics
 import sys
@@ -132,8 +133,12 @@ async def main() -> int:
         )
         world = folder / "cal.playground"
         world.write_text(
-            world_xml(robots, size=(3.0, 1.2), walls=[(1.5, WALL_Y + 0.01, 3.0, 0.02)],
-                      ground="ground.png")  # fmt: skip
+            world_xml(
+                robots,
+                size=(3.0, 1.2),
+                walls=[(1.5, WALL_Y + 0.01, 3.0, 0.02)],
+                ground="ground.png",
+            )
         )
         proc = await start_playground(world, [r.port for r in robots])
         try:
@@ -147,7 +152,7 @@ async def main() -> int:
             unit = statistics.fmean(speeds.values())
         finally:
             await stop_playground(proc)
-    contact = next(d for (d, raw), (_, nxt) in zip(table, table[1:], strict=False) if raw > nxt + 20)
+    contact = next(d for (d, raw), (_, nxt) in itertools.pairwise(table) if raw > nxt + 20)
     print("proximity (prox.horizontal[2]), robot facing a wall:")
     print("  centre-to-wall m   from-sensor m   raw")
     for d, raw in table:

@@ -165,7 +165,9 @@ async def start_playground(
                 await _listening(proc, port)
     except TimeoutError:
         await stop_playground(proc)
-        raise RuntimeError(f"{PLAYGROUND} {world}: no robot listened within {timeout:g} s") from None
+        raise RuntimeError(
+            f"{PLAYGROUND} {world}: no robot listened within {timeout:g} s"
+        ) from None
     except BaseException:
         await stop_playground(proc)
         raise

@@ -21,9 +21,7 @@ from robots.thymio._link import Address
 # What the Playground (aseba 1.6.99) answered: NODE_PRESENT from node 1, protocol 5, and the
 # head of its DESCRIPTION ("thymio-II", 30 named variables, 17 local events, 52 natives).
 NODE_PRESENT = b"\x02\x00\x01\x00\x0c\x90\x05\x00"
-DESCRIPTION = (
-    b"\x18\x00\x01\x00\x00\x90\tthymio-II\x05\x00\xfe\x05 \x00J\x02\x1e\x00\x11\x004\x00"
-)
+DESCRIPTION = b"\x18\x00\x01\x00\x00\x90\tthymio-II\x05\x00\xfe\x05 \x00J\x02\x1e\x00\x11\x004\x00"
 NAMED = b"\x06\x00\x01\x00\x01\x90\x01\x00\x03_id"
 
 
@@ -115,7 +113,9 @@ def test_the_led_program_calls_the_natives_on_the_buttons_event() -> None:
     assert code[-1] == 0
 
 
-def _readings(t: float, prox: tuple[int, ...] = (0,) * 7, speeds: tuple[int, int] = (0, 0)) -> Readings:
+def _readings(
+    t: float, prox: tuple[int, ...] = (0,) * 7, speeds: tuple[int, int] = (0, 0)
+) -> Readings:
     return Readings(t=t, prox=prox, ground=(900, 900), speeds=speeds, buttons=(0, 0, 1, 0, 0))
 
 
@@ -168,7 +168,7 @@ def test_require_names_the_missing_device() -> None:
         ground: object
         camera: object = None
 
-    with pytest.raises(HardwareLost, match="needs a camera.*it has: ground"):
+    with pytest.raises(HardwareLost, match=r"needs a camera.*it has: ground"):
         require(Hw("t", object()), "ground", "camera")
 
 
