@@ -21,17 +21,25 @@ PROX_ANGLES: tuple[float, ...] = (0.69, 0.30, 0.0, -0.30, -0.69, math.pi, math.p
 from left to right, two at the back (left, right), as on the robot's body."""
 
 #: Raw ``prox.horizontal`` reading → distance in metres from the sensor, measured in the
-#: Playground with a robot facing a wall at known distances (see docs/thymio.md): the reading
-#: falls as the wall goes away and is 0 beyond the sensor's reach.
+#: Playground by ``python -m robots.thymio.calibrate`` (robots facing a wall at known
+#: distances; the sensor sits 0.080 m ahead of the wheels' axis): the reading falls as the
+#: wall goes away. Below the first point the sensor counts as seeing nothing.
 PLAYGROUND_PROX: tuple[tuple[int, float], ...] = (
-    (1000, 0.100),
-    (1500, 0.085),
-    (2000, 0.072),
-    (2500, 0.060),
-    (3000, 0.048),
-    (3500, 0.036),
-    (4000, 0.023),
-    (4500, 0.005),
+    (1511, 0.120),
+    (1691, 0.110),
+    (1897, 0.100),
+    (2130, 0.090),
+    (2394, 0.080),
+    (2689, 0.070),
+    (3011, 0.060),
+    (3348, 0.050),
+    (3688, 0.040),
+    (4005, 0.030),
+    (4266, 0.020),
+    (4367, 0.015),
+    (4442, 0.010),
+    (4489, 0.005),
+    (4504, 0.000),
 )
 
 
@@ -46,8 +54,8 @@ class Calibration:
     ``white``: the ground sensors' ``prox.ground.delta`` on a white floor (reflectance 1).
     """
 
-    speed_per_unit: float = 0.166 / 500
-    wheel_base: float = 0.094
+    speed_per_unit: float = 3.26e-4
+    wheel_base: float = 0.0939
     max_target: int = 500
     prox: tuple[tuple[int, float], ...] = field(default=PLAYGROUND_PROX)
     white: float = 1000.0

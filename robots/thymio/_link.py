@@ -121,12 +121,15 @@ class AsebaLink:
         return link
 
     async def _handshake(self, node: int | None) -> None:
-        self._send(aseba.list_nodes(HOST))
-        while True:
-            msg = await self._next()
-            if msg.type == aseba.NODE_PRESENT and node in (None, msg.source):
-                self.node = msg.source
-                break
+        while self.node < 0:  # asked again: a Playground just up may miss the first
+            self._send(aseba.list_nodes(HOST))
+            with contextlib.suppress(TimeoutError):
+                async with asyncio.timeout(0.5):
+                    while True:
+                        msg = await self._next()
+                        if msg.type == aseba.NODE_PRESENT and node in (None, msg.source):
+                            self.node = msg.source
+                            break
         self._send(aseba.get_node_description(HOST, self.node))
         head: aseba.Description | None = None
         offset = 0

@@ -4,8 +4,9 @@ Prints the figures ``robots.thymio.Calibration`` holds, measured against the wor
 (the only ground truth the Aseba protocol leaves: the Playground does not tell poses):
 
 * **proximity curve**: robots placed facing a wall at known distances (centre to wall) read
-  ``prox.horizontal[2]``; where readings stop growing as the wall comes closer is contact,
-  which gives the centre-to-sensor distance, and so each reading's distance from the sensor;
+  ``prox.horizontal[2]``; the farthest robot whose reading is saturated (robots placed
+  nearer are pushed back to contact) gives the centre-to-sensor distance, and so each
+  reading's distance from the sensor;
 * **speed per unit**: a robot drives across two dark stripes 0.30 m apart on the floor; the
   time between its ground sensors' two crossings gives m/s at each motor target;
 * **wheel base**: a robot spins in place on the edge of a dark half-plane; its ground sensors
@@ -38,14 +39,14 @@ from .playground import (
 )
 
 #: Centre-to-wall distances (metres) of the proximity robots.
-PROX_DISTANCES = tuple(round(0.060 + 0.005 * i, 3) for i in range(9)) + tuple(
-    round(0.11 + 0.01 * i, 3) for i in range(10)
+PROX_DISTANCES = tuple(round(0.070 + 0.005 * i, 3) for i in range(6)) + tuple(
+    round(0.10 + 0.02 * i, 3) for i in range(11)
 )
-WALL_Y = 1.0  # the wall's near face
+WALL_Y = 1.6  # the wall's near face
 STRIPES = (0.40, 0.70)  # x of the two dark stripes (2 cm wide) the runner crosses
 RUN_TARGETS = (100, 200, 400)  # motor targets of the runners, one each
 SPIN_TARGET = 300
-SPIN = (1.5, 0.75)  # where the spinner stands: on the edge of the dark half-plane y > 0.75
+SPIN = (1.5, 0.8)  # where the spinner stands: on the edge of the dark half-plane y > 0.8
 
 
 async def _read(link: AsebaLink, name: str) -> tuple[int, ...]:
@@ -129,13 +130,13 @@ async def main() -> int:
         robots = [*prox_robots, *runners.values(), spinner]
         stripes = [(x - 0.01, 0.0, x + 0.01, 0.5) for x in STRIPES]
         (folder / "ground.png").write_bytes(
-            ground_png((3.0, 1.2), [*stripes, (1.0, SPIN[1], 2.0, 1.0)])
+            ground_png((3.0, 1.62), [*stripes, (1.0, SPIN[1], 2.0, 1.1)])
         )
         world = folder / "cal.playground"
         world.write_text(
             world_xml(
                 robots,
-                size=(3.0, 1.2),
+                size=(3.0, 1.62),
                 walls=[(1.5, WALL_Y + 0.01, 3.0, 0.02)],
                 ground="ground.png",
             )
@@ -152,7 +153,8 @@ async def main() -> int:
             unit = statistics.fmean(speeds.values())
         finally:
             await stop_playground(proc)
-    contact = next(d for (d, raw), (_, nxt) in itertools.pairwise(table) if raw > nxt + 20)
+    top = max(raw for _, raw in table)
+    contact = max(d for d, raw in table if raw >= top - 5)  # the farthest saturated reading
     print("proximity (prox.horizontal[2]), robot facing a wall:")
     print("  centre-to-wall m   from-sensor m   raw")
     for d, raw in table:
