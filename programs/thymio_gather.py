@@ -27,7 +27,10 @@ async def thymio_gather(
     ring: float = 0.2,
     timeout: float = 120.0,
 ) -> dict[str, Any]:
-    """Find the dark patch, stand ``ring`` metres from it around it, light green."""
+    """Find the dark patch, stand ``ring`` metres from it around it, light green.
+
+    The search gives up after ``timeout`` seconds (its result then None: no patch); a robot
+    that has not reached its place within ``timeout / 3`` seconds stays where it is."""
     require(robot.hw, "ground", "sonar", "leds")
     hw = robot.hw
     hw.leds.show("blue")
@@ -36,6 +39,10 @@ async def thymio_gather(
     won = await team.distributed_or(
         lambda: wander_until(robot, hw.ground.dark, wander, timeout=timeout)
     )
+    if won.result is None:
+        hw.leds.show("red")
+        await hw.clock.tick()
+        return {"winner": None, "patch": None, "pose": list(hw.odometry.pose())}
     x, y, th = won.result
     patch = (x + SENSORS_AHEAD * math.cos(th), y + SENSORS_AHEAD * math.sin(th))
     await team.report("found", winner=won.winner, patch=[round(patch[0], 3), round(patch[1], 3)])
@@ -44,7 +51,7 @@ async def thymio_gather(
     if team.me != won.winner:
         a = 2 * math.pi * others.index(team.me) / max(len(others), 1)
         place = (patch[0] + ring * math.cos(a), patch[1] + ring * math.sin(a))
-        await team.distributed_and(lambda: drive_to(robot, place, speed=speed, timeout=timeout))
+        await team.distributed_and(lambda: drive_to(robot, place, speed=speed, timeout=timeout / 3))
     else:
         await team.distributed_and(lambda: _stay())
     hw.leds.show("green")

@@ -31,17 +31,19 @@ class _Rng(Protocol):
 class ProxWander:
     """Wander, avoiding what the proximity sensors see (see the module docstring).
 
-    ``step(ranges, angles, reach)`` → (v, w). Each front sensor that sees something within
-    ``reach`` turns the robot away from its side (a centre one: the side the robot last
-    turned to) and slows it; with nothing in sight it drives at ``speed`` and draws a new
+    ``step(ranges, angles, reach)`` → (v, w). When a front sensor sees something within
+    ``reach``, the robot picks a side to turn to — away from the side that sees more, or at
+    random when both see as much (a wall straight ahead) — and keeps turning that way, slowing
+    as it nears, until nothing is in sight: a side chosen afresh each step would flip back and
+    forth in front of a wall. With nothing in sight it drives at ``speed`` and draws a new
     turn rate from ``rng`` every ``every`` steps.
     """
 
     def __init__(
-        self, rng: _Rng, *, speed: float = 0.1, turn: float = 2.5, every: int = 40
+        self, rng: _Rng, *, speed: float = 0.1, turn: float = 2.0, every: int = 40
     ) -> None:
         self.rng, self.speed, self.turn, self.every = rng, speed, turn, every
-        self.side = 1.0
+        self.turning = 0.0  # the side being turned to while avoiding (+1 left, -1 right)
         self.drift = 0.0
         self.steps = 0
 
@@ -50,20 +52,24 @@ class ProxWander:
     ) -> tuple[float, float]:
         """The next (v m/s, w rad/s)."""
         self.steps += 1
-        push, near = 0.0, 0.0
+        left, near = 0.0, 0.0  # how much more the left sees than the right; the closest
         for r, a in zip(ranges, angles, strict=True):
             if abs(a) > math.pi / 2 or r >= reach:
                 continue
             closeness = 1.0 - r / reach
             near = max(near, closeness)
-            side = math.copysign(1.0, a) if a != 0 else self.side
-            push -= side * closeness
-        if near > 0:
-            self.side = -1.0 if push < 0 else 1.0
-            return self.speed * max(0.0, 1.0 - 1.5 * near), self.turn * (push or self.side)
-        if self.steps % self.every == 1:
-            self.drift = self.rng.uniform(-0.8, 0.8)
-        return self.speed, self.drift
+            left += closeness * (1.0 if a > 0 else -1.0 if a < 0 else 0.0)
+        if near == 0.0:
+            self.turning = 0.0
+            if self.steps % self.every == 1:
+                self.drift = self.rng.uniform(-0.8, 0.8)
+            return self.speed, self.drift
+        if self.turning == 0.0:
+            if abs(left) > 0.05:
+                self.turning = -1.0 if left > 0 else 1.0
+            else:
+                self.turning = 1.0 if self.rng.uniform(-1.0, 1.0) >= 0 else -1.0
+        return self.speed * max(0.0, 1.0 - 1.5 * near), self.turn * self.turning
 
 
 async def wander_until(

@@ -18,7 +18,6 @@ Needs ``asebaplayground`` (Debian package ``aseba``); takes about 30 s.
 from __future__ import annotations
 
 import asyncio
-import itertools
 import math
 import statistics
 import sys

@@ -215,3 +215,20 @@ async def test_the_clock_ticks_at_its_rate_holds_and_loses() -> None:
         await clock.tick()
     with pytest.raises(HardwareLost, match="gone"):
         await asyncio.wait_for(waiter, 1.0)
+
+
+def test_the_wander_keeps_its_side_in_front_of_a_wall_and_drifts_in_the_open() -> None:
+    import random
+
+    from robots.thymio import PROX_ANGLES, ProxWander
+
+    wander = ProxWander(random.Random(1), speed=0.1)
+    wall = (0.1, 0.05, 0.03, 0.05, 0.1, 0.1, 0.1)  # straight ahead, the same on both sides
+    turns = {wander.step(wall, PROX_ANGLES, 0.1)[1] for _ in range(20)}
+    assert len(turns) == 1 and turns != {0.0}  # one side, kept: no dithering
+    left = (0.02, 0.04, 0.1, 0.1, 0.1, 0.1, 0.1)
+    fresh = ProxWander(random.Random(1))
+    v, w = fresh.step(left, PROX_ANGLES, 0.1)
+    assert w < 0 and v < 0.1  # away from the left, slower
+    v, w = fresh.step((0.1,) * 7, PROX_ANGLES, 0.1)
+    assert v == fresh.speed and abs(w) <= 0.8
