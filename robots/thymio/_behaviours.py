@@ -34,7 +34,7 @@ class ProxWander:
     ``step(ranges, angles, reach)`` → (v, w). When a front sensor sees something within
     ``reach``, the robot picks a side to turn to — away from the side that sees more, or at
     random when both see as much (a wall straight ahead) — and keeps turning that way, slowing
-    as it nears, until nothing is in sight: a side chosen afresh each step would flip back and
+    as it nears and backing off at contact, until nothing is in sight: a side chosen afresh each step would flip back and
     forth in front of a wall. With nothing in sight it drives at ``speed`` and draws a new
     turn rate from ``rng`` every ``every`` steps.
     """
@@ -69,7 +69,10 @@ class ProxWander:
                 self.turning = -1.0 if left > 0 else 1.0
             else:
                 self.turning = 1.0 if self.rng.uniform(-1.0, 1.0) >= 0 else -1.0
-        return self.speed * max(0.0, 1.0 - 1.5 * near), self.turn * self.turning
+        # Slower as it nears; backing off a little at contact, where a corner of the body
+        # can wedge a turn on the spot against a wall or a teammate.
+        v = self.speed * max(-0.3, 1.0 - 1.5 * near)
+        return v, self.turn * self.turning
 
 
 async def wander_until(
