@@ -1,7 +1,7 @@
 """Behaviours and procedures for a robot whose range sensors reach only a few centimetres.
 
 The library's wander (``robots.library.Wander``) waits for the bumper and its go-to repels from
-anything within 45 cm; a Thymio has no bumper and sees 10 cm. :class:`ProxWander` is a
+anything within 45 cm; a Thymio has no bumper and sees 12 cm. :class:`ProxWander` is a
 Braitenberg vehicle instead (turn away from what the front sensors see, slow down as it
 nears, change heading now and then); :func:`wander_until` and :func:`drive_to` run it and
 the library's ``steer`` (with the sensors' own reach) on the HAL, stopping the motors in
@@ -34,9 +34,9 @@ class ProxWander:
     ``step(ranges, angles, reach)`` → (v, w). When a front sensor sees something within
     ``reach``, the robot picks a side to turn to — away from the side that sees more, or at
     random when both see as much (a wall straight ahead) — and keeps turning that way, slowing
-    as it nears and backing off at contact, until nothing is in sight: a side chosen afresh each step would flip back and
-    forth in front of a wall. With nothing in sight it drives at ``speed`` and draws a new
-    turn rate from ``rng`` every ``every`` steps.
+    as it nears and backing off at contact, until nothing is in sight: a side chosen afresh
+    each step would flip back and forth in front of a wall. With nothing in sight it drives
+    at ``speed`` and draws a new turn rate from ``rng`` every ``every`` steps.
     """
 
     def __init__(

@@ -55,7 +55,7 @@ class Calibration:
     """
 
     speed_per_unit: float = 3.26e-4
-    wheel_base: float = 0.0939
+    wheel_base: float = 0.094
     max_target: int = 500
     prox: tuple[tuple[int, float], ...] = field(default=PLAYGROUND_PROX)
     white: float = 1000.0

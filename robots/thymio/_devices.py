@@ -112,7 +112,7 @@ class ThymioOdometry(_Fed):
 class Proximity(_Fed):
     """``robots.hal.Sonar`` of the 7 horizontal infrared sensors, in metres from the sensor.
 
-    Short reach (about 10 cm): a sensor that sees nothing reads ``max_range``. What the
+    Short reach (about 12 cm): a sensor that sees nothing reads ``max_range``. What the
     infrared sees depends on the obstacle's colour and material; the curve is a white wall's.
     """
 

@@ -50,7 +50,7 @@ LED_EVENT = "buttons"
 class ThymioHardware(Hardware):
     """A Thymio II: the HAL's :class:`~robots.hal.Hardware` and its own devices.
 
-    ``sonar`` is the 7 proximity sensors (:class:`~robots.thymio.Proximity`, about 10 cm of
+    ``sonar`` is the 7 proximity sensors (:class:`~robots.thymio.Proximity`, about 12 cm of
     reach), ``led`` the top LED; ``ground``, ``buttons`` and ``leds`` (top and circle) are the
     Thymio's. ``camera``, ``bumper``, ``floor`` and ``push`` are None: it has none.
     """

@@ -253,6 +253,8 @@ class AsebaLink:
         finally:
             self._lose(HardwareLost(f"the link to the Thymio at {self.address} was closed"))
             self._writer.close()  # the stream ends with its reader
+            with contextlib.suppress(Exception):  # (a reset was said already: _lose)
+                await self._writer.wait_closed()
 
     def _dispatch(self, msg: aseba.Message) -> None:
         if msg.type == aseba.VARIABLES and msg.source == self.node:
@@ -285,6 +287,23 @@ class AsebaLink:
 class _Writer(Protocol):
     def write(self, data: bytes) -> None: ...
     def close(self) -> None: ...
+    async def wait_closed(self) -> None: ...
+
+
+class _PipeWriter:
+    """A serial device's write side, as a StreamWriter is used here."""
+
+    def __init__(self, transport: asyncio.WriteTransport) -> None:
+        self._transport = transport
+
+    def write(self, data: bytes) -> None:
+        self._transport.write(data)
+
+    def close(self) -> None:
+        self._transport.close()
+
+    async def wait_closed(self) -> None:
+        return None
 
 
 def _why(exc: BaseException) -> str:
@@ -311,4 +330,4 @@ async def _open_stream(address: Address) -> tuple[asyncio.StreamReader, _Writer]
     transport, _ = await loop.connect_write_pipe(
         asyncio.BaseProtocol, os.fdopen(write_fd, "wb", buffering=0)
     )
-    return reader, transport
+    return reader, _PipeWriter(transport)

@@ -4,7 +4,7 @@
 Enki; each simulated Thymio listens on its own TCP port and speaks Aseba as a physical one does.
 :func:`world_xml` writes such a file (metres and radians in, the Playground's centimetres
 out); :func:`start_playground` starts it headless (Qt's ``offscreen`` platform: no X server,
-no Xvfb) and returns once every robot's port listens; :func:`stop_playground` ends it.
+no Xvfb) and returns once every robot answers on its port; :func:`stop_playground` ends it.
 
 Without a display the Playground still simulates in real time (about 0.2 of a core for three
 robots); it listens on every interface, as it has no option to bind one.
@@ -26,6 +26,9 @@ from pathlib import Path
 from typing import IO
 
 from mover._orphans import guarded
+from robots.hal import HardwareLost
+
+from ._link import Address, AsebaLink
 
 __all__ = [
     "PLAYGROUND",
@@ -133,7 +136,7 @@ async def start_playground(
     log: IO[bytes] | None = None,
     timeout: float = 20.0,
 ) -> asyncio.subprocess.Process:
-    """Start the Playground on ``world``, headless; return once each of ``ports`` listens.
+    """Start the Playground on ``world``, headless; return once each robot of ``ports`` answers.
 
     Its state (the simulated robots' flash) goes to a temporary folder, not the user's. Raises
     FileNotFoundError naming the ``aseba`` package when it is not installed, RuntimeError with
@@ -162,7 +165,7 @@ async def start_playground(
     try:
         async with asyncio.timeout(timeout):
             for port in ports:
-                await _listening(proc, port)
+                await _answering(proc, port)
     except TimeoutError:
         await stop_playground(proc)
         raise RuntimeError(
@@ -174,18 +177,18 @@ async def start_playground(
     return proc
 
 
-async def _listening(proc: asyncio.subprocess.Process, port: int) -> None:
+async def _answering(proc: asyncio.subprocess.Process, port: int) -> None:
+    """Return once the robot on ``port`` answers Aseba (its port listens some time before)."""
+    address = Address(host="127.0.0.1", port=port)
     while True:
         if proc.returncode is not None:
             raise RuntimeError(f"{PLAYGROUND} exited with code {proc.returncode}")
         try:
-            _, writer = await asyncio.open_connection("127.0.0.1", port)
-        except OSError:
+            link = await AsebaLink.open(address, None, 1.0)
+        except HardwareLost:
             await asyncio.sleep(0.1)
             continue
-        writer.close()
-        with contextlib.suppress(OSError):
-            await writer.wait_closed()
+        await link.aclose()
         return
 
 
