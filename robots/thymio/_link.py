@@ -89,7 +89,7 @@ class AsebaLink:
         self.natives: list[str] = []
         self._reader = reader
         self._writer = writer
-        self._inbox: asyncio.Queue[aseba.Message] = asyncio.Queue()
+        self._inbox: asyncio.Queue[aseba.Message | None] = asyncio.Queue()
         self._waiting: dict[int, list[asyncio.Future[tuple[int, ...]]]] = {}
         self._lost: HardwareLost | None = None
         self._task = asyncio.get_running_loop().create_task(self._read())
@@ -157,13 +157,13 @@ class AsebaLink:
         self.table_size = offset
 
     async def _next(self) -> aseba.Message:
-        get = asyncio.ensure_future(self._inbox.get())
-        await asyncio.wait([get, self._task], return_when=asyncio.FIRST_COMPLETED)
-        if not get.done():
-            get.cancel()
+        # A plain Queue.get: cancelled (a handshake's timeout), it takes nothing from the
+        # queue, so the next call gets the next message (a getter task left behind would not).
+        msg = await self._inbox.get()
+        if msg is None:  # the link ended (see _lose)
             self._check()
             raise HardwareLost(f"the Thymio at {self.address} closed the link")
-        return get.result()
+        return msg
 
     def require(self, names: Iterable[str]) -> None:
         """HardwareLost naming what is missing unless the node has every variable of ``names``
@@ -272,6 +272,7 @@ class AsebaLink:
         if self._lost is not None:
             return
         self._lost = exc
+        self._inbox.put_nowait(None)  # wakes a handshake under way
         for waiters in self._waiting.values():
             for answer in waiters:
                 if not answer.done():

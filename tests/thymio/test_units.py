@@ -232,3 +232,33 @@ def test_the_wander_keeps_its_side_in_front_of_a_wall_and_drifts_in_the_open() -
     assert w < 0 and v < 0.1  # away from the left, slower
     v, w = fresh.step((0.1,) * 7, PROX_ANGLES, 0.1)
     assert v == fresh.speed and abs(w) <= 0.8
+
+
+async def test_a_handshake_asks_again_and_takes_the_late_answer() -> None:
+    """The first question goes unanswered (a Playground just up): the answer to the second
+    one is taken, not swallowed by what the first wait left behind."""
+    from robots.thymio._link import AsebaLink
+
+    asked = 0
+
+    async def node(reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+        nonlocal asked
+        buffer = bytearray()
+        while chunk := await reader.read(100):
+            buffer += chunk
+            for msg in aseba.split(buffer):
+                if msg.type == aseba.LIST_NODES:
+                    asked += 1
+                    if asked >= 3:
+                        writer.write(NODE_PRESENT)
+                elif msg.type == aseba.GET_NODE_DESCRIPTION:
+                    head = b"\tthymio-II\x05\x00\xfe\x05 \x00J\x02\x01\x00\x00\x00\x00\x00"
+                    writer.write(aseba.Message(aseba.DESCRIPTION, 1, head).encode() + NAMED)
+        writer.close()
+
+    server = await asyncio.start_server(node, "127.0.0.1", 0)
+    port = server.sockets[0].getsockname()[1]
+    async with server:
+        link = await AsebaLink.open(Address(host="127.0.0.1", port=port), None, 5.0)
+        assert asked >= 3 and link.variables == {"_id": (0, 1)} and link.name == "thymio-II"
+        await link.aclose()
