@@ -63,11 +63,11 @@ async def test_each_device_against_the_playground(tmp_path: Path, playground: Pl
     world.write_text(world_xml(robots, size=(1.6, 1.52), walls=[(0.8, 1.51, 1.6, 0.02)],
                                ground="floor.png"))  # fmt: skip
     await playground(world, [r.port for r in robots])
-    near, run, spin = await asyncio.gather(*(_connect(r) for r in robots))
+    near, run, spin = [await _connect(r) for r in robots]  # one after the other
     await asyncio.gather(_ticks(near, 0.3), _ticks(spin, 0.3))
     assert near.sonar is not None and spin.sonar is not None
     assert near.sonar.ranges()[2] < 0.06 < spin.sonar.max_range == spin.sonar.ranges()[2]
-    assert spin.ground.reflectance()[0] > 0.8  # white floor under the spinner's sensors
+    assert min(run.ground.reflectance()) > 0.8  # white floor under the runner's sensors
     assert not near.buttons.pressed()
 
     async def straight() -> list[float]:
