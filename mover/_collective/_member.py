@@ -19,7 +19,9 @@ from typing import TYPE_CHECKING, Any
 
 from .._exceptions import MemberLost, NotDelivered
 from ._clock import RunClock, TimedOp, hold_here
-from ._designated import AND_DONE, AND_JOIN, AND_PUT, OR_CLAIM, OR_JOIN, Collectives
+from ._designated import Collectives
+from ._designated_and import AND_DONE, AND_JOIN, AND_PUT
+from ._designated_or import OR_CLAIM, OR_JOIN
 from ._group import Settled, StepTasks
 from ._reach import Retry, wait_lost, wait_reachable
 from ._step import (
@@ -392,7 +394,7 @@ class TaskTeam:
                 except Retry:
                     await self._recover(member)
 
-        self.collectives.and_put(self.run, metrics.step, self.me, self.members, result)
+        self.collectives.ands.put(self.run, metrics.step, self.me, self.members, result)
         # Leaving waits for every send (the others need this result, even once this member
         # has all of theirs); a send that fails for good fails the step, and cancels the rest.
         async with StepTasks() as senders:
