@@ -21,7 +21,7 @@ import logging
 from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any
 
-from .._exceptions import MemberLost, WireError
+from .._exceptions import MemberLost, MoverError, WireError
 from .._futures import failure
 from .._ratelog import RateLog
 from ._designated_and import AND_DONE, AND_JOIN, AND_PUT, AndSteps
@@ -43,6 +43,7 @@ if TYPE_CHECKING:
 log = logging.getLogger("mover.tasks")
 
 RUN_LOST = "mover.run_lost"
+LEFT = "left"  # ``[run, step, "left"]`` on DECIDED_TOPIC: the sender's run ended after ``step``
 
 
 class Collectives:
@@ -60,6 +61,8 @@ class Collectives:
         self._closed = False
         self._gone: set[str] = set()  # members lost (past the grace) and not back since
         self._dropped: dict[str, set[str]] = {}  # run -> members lost or left out in it
+        self._through: dict[str, int] = {}  # run -> the last step this member got through
+        self._left: dict[str, dict[str, int]] = {}  # run -> member whose run ended -> its last
         self._announcements = node.subscribe(DECIDED_TOPIC)
         self.questions = Questions(self)  # what a served step asks its members
         self.ors = OrSteps(self)  # the OR steps served here
@@ -166,6 +169,8 @@ class Collectives:
             # Lost before the step was served here (before any member reached it, say): as
             # if lost during it (_member_left), or no one would ever count it.
             state.gone = {m for m in state.members & self._gone if m not in alive}
+            # Its run ended here before the step (it said so): as if lost, too.
+            state.gone |= {m for m in state.members if self._ended_before(run, m, step)}
         return state
 
     def sent(self, run: str, step: int) -> int:
@@ -223,6 +228,10 @@ class Collectives:
                     and type(data[1]) is int
                 ):
                     raise WireError("not [run, step, decision]")
+                if data[2] == LEFT:
+                    if message.sender in self.node.membership:  # (a live member only)
+                        self._member_ended(data[0], message.sender, data[1])
+                    continue
                 decision = Decision.from_wire(data[2])
             except WireError as exc:
                 self._faults.warn("decision", f"dropped a decision from {message.sender!r}: {exc}")
@@ -233,11 +242,13 @@ class Collectives:
 
     def start_run(self, run: str) -> None:
         """A run named ``run`` starts here: forget what an earlier run of that name left (its
-        decided steps, heard decisions, operations, whom it lost; that it ended). What other
-        members already sent for the new run stays: it cannot be decided before this member
-        began."""
+        decided steps, heard decisions, operations, whom it lost, whose run ended; that it
+        ended). What other members already sent for the new run stays: it cannot be decided
+        before this member began."""
         self.operations.start_run(run)
         self._dropped.pop(run, None)
+        self._through.pop(run, None)
+        self._left.pop(run, None)
         for key in [k for k, st in self._steps.items() if k[0] == run and st.decision.done()]:
             del self._steps[key]
 
@@ -267,13 +278,52 @@ class Collectives:
     def _expected(self, state: Step) -> set[str]:
         """The members whose word the step waits for: those alive, but for those an earlier
         step of the run went on without (``survivors``: one back from a stall is not waited
-        for again, as its run ends when it sees the team: ProgramHost)."""
+        for again, as its run ends when it sees the team: ProgramHost) and those whose run
+        ended before the step."""
         dropped = self._dropped.get(state.run, set())
-        return {m for m in state.members if m in self.node.membership and m not in dropped}
+        return {
+            m
+            for m in state.members
+            if m in self.node.membership
+            and m not in dropped
+            and not self._ended_before(state.run, m, state.step)
+        }
+
+    def got_through(self, run: str, step: int) -> None:
+        """This node's member got through step ``(run, step)`` (its decision known here)."""
+        self._through[run] = step
+        while len(self._through) > STEP_MEMORY:
+            del self._through[next(iter(self._through))]
 
     def end_run(self, run: str) -> None:
-        """Run ``run`` ended here: questions about its steps are answered "out" from now on."""
+        """Run ``run`` ended here (its program returned, raised or was cancelled): questions
+        about its steps are answered "out" from now on, and the run's other members are told
+        (one broadcast, ``[run, step, "left"]``) that this member takes part in none of its
+        steps after ``step``, the last it got through: one that waits for it ends as if it
+        had been lost (:meth:`_member_ended`), here too."""
         self.operations.end_run(run)
+        through = self._through.pop(run, 0)
+        self._member_ended(run, self.node.name, through)
+        if not self._closed:
+            try:
+                self.node.broadcast_nowait(DECIDED_TOPIC, [run, through, LEFT], reliable=True)
+            except MoverError as exc:  # the node is closing: its members see it go
+                log.debug("%s: run %r ended unannounced: %s", self.node.name, run, exc)
+
+    def _ended_before(self, run: str, member: str, step: int) -> bool:
+        """Whether ``member``'s run ``run`` ended before step ``step`` (as it said)."""
+        return self._left.get(run, {}).get(member, step) < step
+
+    def _member_ended(self, run: str, member: str, through: int) -> None:
+        """``member``'s run ``run`` ended after its step ``through``: every later step of the
+        run served here counts it as gone (policy ``fail``: lost; ``survivors``: not waited
+        for), whether served already or later (:meth:`serve`)."""
+        self._left.setdefault(run, {})[member] = through
+        while len(self._left) > STEP_MEMORY:
+            del self._left[next(iter(self._left))]
+        for state in list(self._steps.values()):
+            if state.run == run and state.step > through:
+                self._count_gone(state, member)
 
     def _settle(self, state: Step) -> None:
         """Decide served step ``state`` if it can be, now."""
@@ -284,12 +334,17 @@ class Collectives:
             return  # we are cut off, not they: stall (see docs/collectives.md, Failures)
         self._gone.add(name)  # for the steps served from now on, too
         for state in list(self._steps.values()):
-            if not state.served or state.decision.done() or name not in state.members:
-                continue
-            state.gone.add(name)
-            if name < self.node.name and state.kind != "and_all":
-                state.takeover = True  # it may have been the designated member, and decided
-            if not self._expected(state):
-                self._decide(state, Decision("lost", lost=tuple(sorted(state.members))))
-            else:
-                self._settle(state)
+            self._count_gone(state, name, takeover=name < self.node.name)
+
+    def _count_gone(self, state: Step, name: str, *, takeover: bool = False) -> None:
+        """Member ``name`` is gone from step ``state``: if this node serves it, undecided,
+        decide it if it can be, now (``takeover``: it may have been the designated member)."""
+        if not state.served or state.decision.done() or name not in state.members:
+            return
+        state.gone.add(name)
+        if takeover and state.kind != "and_all":
+            state.takeover = True  # it may have been the designated member, and decided
+        if not self._expected(state):
+            self._decide(state, Decision("lost", lost=tuple(sorted(state.members))))
+        else:
+            self._settle(state)

@@ -125,7 +125,7 @@ class TaskTeam:
                 members=frozenset(self.members) - {self.me},
             ) from None
         metrics.continued = time.perf_counter()
-        self._raise_lost(metrics, decision)
+        self._through(metrics, decision)
         nows: dict[str, float | None] = {}
         for member, report in decision.results.items():
             value = report.get("now") if isinstance(report, dict) else None
@@ -149,7 +149,10 @@ class TaskTeam:
                 sorted(m for m, v in nows.items() if v is None),
             )
 
-    def _raise_lost(self, metrics: StepMetrics, decision: Decision) -> None:
+    def _through(self, metrics: StepMetrics, decision: Decision) -> None:
+        """This member got through step ``metrics.step`` (its ``decision`` known here): raise
+        MemberLost if the step lost a member."""
+        self.collectives.got_through(self.run, metrics.step)
         if decision.kind == "lost":
             raise MemberLost(
                 decision.lost_message(self.run, metrics.step, self.me),
@@ -180,7 +183,7 @@ class TaskTeam:
             # As the designated member, its questions of the step: ended (and awaited) too.
             await self.collectives.step_ended(self.run, metrics.step)
             metrics.continued = time.perf_counter()
-            self._raise_lost(metrics, decision)
+            self._through(metrics, decision)
             if clock is not None:
                 # Every member has stopped its operation before any goes on: a winner that
                 # ticked at once could else let a loser's operation, not yet told, take one
@@ -318,7 +321,7 @@ class TaskTeam:
                     else:
                         decision = await self._and_all(metrics, wire)
             metrics.continued = time.perf_counter()
-            self._raise_lost(metrics, decision)
+            self._through(metrics, decision)
             if timed:
                 await self._rejoin()
         finally:
@@ -414,7 +417,7 @@ class TaskTeam:
         metrics = self._begin("rejoin")
         decision = await self._and_designated(metrics, None)
         metrics.continued = time.perf_counter()
-        self._raise_lost(metrics, decision)
+        self._through(metrics, decision)
 
     def _begin(self, kind: str) -> StepMetrics:
         self._step += 1
