@@ -1,7 +1,8 @@
 """The collectives: ``distributed_or`` and ``distributed_and`` among the members of a run.
 
 A member's side (:class:`TaskTeam`, ``_member``), the node's side that serves the steps it is
-designated for and holds each step's decision (:class:`Collectives`, ``_designated``), this
+designated for and holds each step's decision (:class:`Collectives`, ``_designated``; its
+parts ``_designated_or``, ``_designated_and`` and ``_questions`` decide the steps it serves), this
 member's operations as the designated member asks about them (``_operations``), what a step is
 (``_step``), the one owner of a step's tasks (``_group``), the run's clock (:class:`RunClock`,
 ``_clock``). The protocol, its costs and its wire: ``docs/collectives.md``.

@@ -3,42 +3,32 @@
 It owns every step's record on this node (:class:`~._step.Step`) and is the only writer of
 its decision, whichever way the decision becomes known here: decided as the step's designated
 member (from the claims, polls and results of the others; announced at once, in one broadcast),
-heard in another's announcement, or told to this node's own member in an answer. It asks the
-others ``or_passed`` (:class:`~._operations.Operations` answers it) and, taking a step over from
-a designated member that is gone, ``step_known``: the gone one may have decided the step and
-told some members before it died, and a decision once made is the one every member ends with,
-so a successor decides only once every live member has said what it knows, and adopts a
-decision one of them holds. Its questions run in a TaskGroup of the step's own, which ends,
-awaited, when the step is decided; the steps' groups belong to one TaskGroup of the node's.
-A member lost at any moment fails (policy ``fail``) every undecided step it is a member of,
-served here already or later (it is remembered, while it stays gone). Protocol and costs:
+heard in another's announcement, or told to this node's own member in an answer. Its parts
+decide: :class:`~._designated_or.OrSteps` the OR steps served here,
+:class:`~._designated_and.AndSteps` the AND steps, and :class:`~._questions.Questions` asks the
+members what the step waits for (``or_passed``; ``step_known``, taking a step over from a
+designated member that is gone). A served step's questions run in a TaskGroup of the step's own,
+which ends, awaited, when the step is decided; the steps' groups belong to one TaskGroup of the
+node's. A member lost at any moment fails (policy ``fail``) every undecided step it is a member
+of, served here already or later (it is remembered, while it stays gone). Protocol and costs:
 ``docs/collectives.md``. Memory: the last ``STEP_MEMORY`` steps and runs.
 """
 
 from __future__ import annotations
 
 import asyncio
-import inspect
 import logging
-import math
-from collections.abc import Awaitable, Callable, Sequence
-from functools import partial
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any
 
-from .._exceptions import (
-    Answered,
-    CallTimeout,
-    MemberLost,
-    NotDelivered,
-    RemoteError,
-    WireError,
-)
+from .._exceptions import MemberLost, MoverError, WireError
 from .._futures import failure
 from .._ratelog import RateLog
+from ._designated_and import AND_DONE, AND_JOIN, AND_PUT, AndSteps
+from ._designated_or import OR_CLAIM, OR_JOIN, OR_PASSED, OrSteps
 from ._operations import Operations
-from ._reach import wait_reachable
+from ._questions import STEP_KNOWN, Questions
 from ._step import (
-    CALL_TIMEOUT,
     DECIDED_TOPIC,
     LOST_GRACE,
     STEP_MEMORY,
@@ -52,14 +42,8 @@ if TYPE_CHECKING:
 
 log = logging.getLogger("mover.tasks")
 
-OR_JOIN = "mover.or_join"
-OR_CLAIM = "mover.or_claim"
-OR_PASSED = "mover.or_passed"
-STEP_KNOWN = "mover.step_known"
-AND_DONE = "mover.and_done"
-AND_JOIN = "mover.and_join"
-AND_PUT = "mover.and_put"
 RUN_LOST = "mover.run_lost"
+LEFT = "left"  # ``[run, step, "left"]`` on DECIDED_TOPIC: the sender's run ended after ``step``
 
 
 class Collectives:
@@ -77,18 +61,23 @@ class Collectives:
         self._closed = False
         self._gone: set[str] = set()  # members lost (past the grace) and not back since
         self._dropped: dict[str, set[str]] = {}  # run -> members lost or left out in it
+        self._through: dict[str, int] = {}  # run -> the last step this member got through
+        self._left: dict[str, dict[str, int]] = {}  # run -> member whose run ended -> its last
         self._announcements = node.subscribe(DECIDED_TOPIC)
+        self.questions = Questions(self)  # what a served step asks its members
+        self.ors = OrSteps(self)  # the OR steps served here
+        self.ands = AndSteps(self)  # the AND steps served here
         self._listener = asyncio.get_running_loop().create_task(self._serve())
         #: The procedures, by their wire name: exported, and called directly by this node's
         #: own member when it is the designated one (no message).
         self.procedures: dict[str, Callable[..., Any]] = {
-            OR_JOIN: self.or_join,
-            OR_CLAIM: self.or_claim,
+            OR_JOIN: self.ors.join,
+            OR_CLAIM: self.ors.claim,
             OR_PASSED: self.operations.or_passed,
             STEP_KNOWN: self.step_known,
-            AND_DONE: self.and_done,
-            AND_JOIN: self.and_join,
-            AND_PUT: self.and_put,
+            AND_DONE: self.ands.done,
+            AND_JOIN: self.ands.join,
+            AND_PUT: self.ands.put,
             RUN_LOST: self.run_lost,
         }
         for name, procedure in self.procedures.items():
@@ -147,7 +136,7 @@ class Collectives:
             while len(self._dropped) > STEP_MEMORY:
                 del self._dropped[next(iter(self._dropped))]
         if state.served:
-            self._tell(state)
+            self.ors.tell(state)
 
     def run_lost(self, run: str) -> list[str]:
         """The members of run ``run`` that a step decided here, heard or learned here lost
@@ -155,17 +144,17 @@ class Collectives:
         which cannot tell otherwise whether the team went on without it."""
         return sorted(self._dropped.get(run, ()))
 
-    def _tell(self, state: Step) -> None:
-        """A served OR step is decided: stop asking, and tell the members the decision, in one
-        broadcast unless every one of them asked (they get it in their answer). Once."""
-        if state.kind != "or" or state.told:
-            return
-        state.told = True  # (the step's questions end with it: see _own)
-        others = state.members - {self.node.name}
-        if not others <= state.joined:
-            wire = [state.run, state.step, state.decision.result().to_wire()]
-            self.node.broadcast_nowait(DECIDED_TOPIC, wire, reliable=True)
-            state.announced = len(others)
+    def step_known(self, run: str, step: int) -> Any:
+        """A successor taking step ``(run, step)`` over asks what this node knows of it: its
+        decision if known here (as on the wire), else None, at once. A member that knows
+        nothing cannot learn the decision but from the successor (the member that made it is
+        gone): it joins the successor once it reaches the step, if it ever does (not if its run
+        ended here), and gets the successor's."""
+        state = self._steps.get((run, step))
+        known = None if state is None else state.decision
+        if known is None or not known.done() or known.cancelled() or known.exception():
+            return None
+        return known.result().to_wire()
 
     def serve(self, run: str, step: int, members: Sequence[str], kind: str = "and") -> Step:
         """The record of step ``(run, step)``, served here as its designated member (or, for an
@@ -180,6 +169,8 @@ class Collectives:
             # Lost before the step was served here (before any member reached it, say): as
             # if lost during it (_member_left), or no one would ever count it.
             state.gone = {m for m in state.members & self._gone if m not in alive}
+            # Its run ended here before the step (it said so): as if lost, too.
+            state.gone |= {m for m in state.members if self._ended_before(run, m, step)}
         return state
 
     def sent(self, run: str, step: int) -> int:
@@ -237,6 +228,10 @@ class Collectives:
                     and type(data[1]) is int
                 ):
                     raise WireError("not [run, step, decision]")
+                if data[2] == LEFT:
+                    if message.sender in self.node.membership:  # (a live member only)
+                        self._member_ended(data[0], message.sender, data[1])
+                    continue
                 decision = Decision.from_wire(data[2])
             except WireError as exc:
                 self._faults.warn("decision", f"dropped a decision from {message.sender!r}: {exc}")
@@ -247,11 +242,13 @@ class Collectives:
 
     def start_run(self, run: str) -> None:
         """A run named ``run`` starts here: forget what an earlier run of that name left (its
-        decided steps, heard decisions, operations, whom it lost; that it ended). What other
-        members already sent for the new run stays: it cannot be decided before this member
-        began."""
+        decided steps, heard decisions, operations, whom it lost, whose run ended; that it
+        ended). What other members already sent for the new run stays: it cannot be decided
+        before this member began."""
         self.operations.start_run(run)
         self._dropped.pop(run, None)
+        self._through.pop(run, None)
+        self._left.pop(run, None)
         for key in [k for k, st in self._steps.items() if k[0] == run and st.decision.done()]:
             del self._steps[key]
 
@@ -278,259 +275,76 @@ class Collectives:
         spared = state.results.keys() if state.kind == "and_all" else set()
         return tuple(sorted(set(state.lost) | (state.gone - spared)))
 
-    def end_run(self, run: str) -> None:
-        """Run ``run`` ended here: questions about its steps are answered "out" from now on."""
-        self.operations.end_run(run)
-
-    # -- the designated member's questions ---------------------------------------------------
-
-    def _ask(self, state: Step, key: tuple[str, str], ask: Callable[[], Awaitable[None]]) -> None:
-        """Start question ``key`` (what, whom) of served step ``state``, in its group."""
-        task = state.asking.get(key)
-        if task is not None and not task.done():
-            return  # one question at a time: a later answer covers an earlier one
-        if state.tasks is None:  # its owner is not (or no longer) under way
-            if not self._closed and not state.decision.done():
-                self._start_owner(state)  # (its group opens with a later loop turn)
-                asyncio.get_running_loop().call_soon(self._ask, state, key, ask)
-            return
-        if self._closed or state.decision.done():
-            return  # nobody is left to tell the answer to, or it is no longer needed
-        question = self._question(key, ask)
-        try:
-            state.asking[key] = state.tasks.create_task(question)
-        except RuntimeError:  # the owner's group is shutting down (the node is closing)
-            question.close()
-
-    async def _question(self, key: tuple[str, str], ask: Callable[[], Awaitable[None]]) -> None:
-        try:
-            await ask()
-        except Exception as exc:  # a question that fails is not the other questions' concern
-            log.debug("%s: %s question to %s failed: %r", self.node.name, *key, exc)
-
-    async def _answer(self, state: Step, member: str, procedure: str, *args: Any) -> Any:
-        """``member``'s answer to ``procedure(run, step, *args)`` about ``state`` (asked again
-        while it is alive); raise LookupError once it is gone (_member_left then decides)."""
-        while True:
-            try:
-                if member == self.node.name:
-                    answer = self.procedures[procedure](state.run, state.step, *args)
-                    return await answer if inspect.isawaitable(answer) else answer
-                state.questions += 1
-                return await self.node.call(
-                    member, procedure, state.run, state.step, *args, timeout=CALL_TIMEOUT
-                )
-            except CallTimeout:
-                continue  # it is alive (liveness ends the call sooner): ask again
-            except (NotDelivered, RemoteError) as exc:
-                if isinstance(exc, RemoteError) and exc.remote_type != "Cancelled":
-                    raise
-                if not await wait_reachable(self.node, member):
-                    raise LookupError(member) from None
-                # lost for a moment, or its call was cancelled as it closed: ask again
-
-    def _heard_all(self, state: Step) -> bool:
-        """Whether served step ``state`` may be decided here: yes as its designated member;
-        taking it over (a designated member before this one is gone), only once every live
-        member has said what it knows, asked ``step_known`` meanwhile. The gone one may have
-        decided and told some of them: that decision is then adopted (:meth:`_known_from`)."""
-        if not state.takeover:
-            return True
-        silent = self._expected(state) - state.joined - state.results.keys() - state.said
-        for member in sorted(silent):
-            self._ask(state, ("step_known", member), partial(self._known_from, state, member))
-        return not silent
-
-    async def _known_from(self, state: Step, member: str) -> None:
-        try:
-            answer = await self._answer(state, member, STEP_KNOWN)
-        except LookupError:
-            return  # gone: _member_left decides, as for any step
-        except Answered as exc:  # it answers, but cannot say (a bug): it cannot know better
-            log.warning("%s: %s cannot say what it knows: %s", self.node.name, member, exc)
-            answer = None
-        if answer is not None and not state.decision.done():
-            try:
-                self._decide(state, Decision.from_wire(answer))  # the one decision: adopted
-                return
-            except WireError as exc:
-                self._faults.warn("known", f"{member!r} said no decision: {exc}")
-        state.said.add(member)
-        self._settle(state)
-
-    def step_known(self, run: str, step: int) -> Any:
-        """A successor taking step ``(run, step)`` over asks what this node knows of it: its
-        decision if known here (as on the wire), else None, at once. A member that knows
-        nothing cannot learn the decision but from the successor (the member that made it is
-        gone): it joins the successor once it reaches the step, if it ever does (not if its run
-        ended here), and gets the successor's."""
-        state = self._steps.get((run, step))
-        known = None if state is None else state.decision
-        if known is None or not known.done() or known.cancelled() or known.exception():
-            return None
-        return known.result().to_wire()
-
-    def _settle(self, state: Step) -> None:
-        """Decide served step ``state`` if it can be, now."""
-        if state.kind == "or":
-            self._maybe_decide(state)
-        else:
-            self._maybe_complete(state)
-
-    # -- the designated member: OR -----------------------------------------------------------
-
-    def _ask_passed(self, state: Step, member: str, t: float) -> None:
-        self._ask(state, ("or_passed", member), lambda: self._passed_from(state, member, t))
-
-    async def _passed_from(self, state: Step, member: str, t: float) -> None:
-        try:
-            answer = await self._answer(state, member, OR_PASSED, t)
-        except LookupError:
-            return  # gone: _member_left decides, as for any step
-        except Answered as exc:  # it answers, but cannot say its time (no clock, a bug)
-            log.warning("%s: %s cannot say its time: %s", self.node.name, member, exc)
-            answer = {"out": True}  # it never claims
-        if not isinstance(answer, dict):
-            answer = {"out": True}
-        finished = answer.get("finished")
-        if isinstance(finished, (int, float)):
-            state.finished[member] = float(finished)
-        elif "passed" in answer:
-            state.beyond[member] = max(t, state.beyond.get(member, -math.inf))
-        else:
-            state.beyond[member] = math.inf
-        self._maybe_decide(state)
-
     def _expected(self, state: Step) -> set[str]:
         """The members whose word the step waits for: those alive, but for those an earlier
         step of the run went on without (``survivors``: one back from a stall is not waited
-        for again, as its run ends when it sees the team: ProgramHost)."""
+        for again, as its run ends when it sees the team: ProgramHost) and those whose run
+        ended before the step."""
         dropped = self._dropped.get(state.run, set())
-        return {m for m in state.members if m in self.node.membership and m not in dropped}
-
-    async def or_join(self, run: str, step: int, member: str, members: list[str]) -> Any:
-        """A member waits for the decision."""
-        state = self.serve(run, step, members, "or")
-        state.joined.add(member)
-        self._maybe_decide(state)
-        return (await asyncio.shield(state.decision)).to_wire()
-
-    async def or_claim(
-        self,
-        run: str,
-        step: int,
-        member: str,
-        members: list[str],
-        result: Any,
-        finished_at: float | None = None,
-    ) -> Any:
-        """A member finished its operation: it wins unless someone claimed first (or, with a
-        ``finished_at``, finished earlier in simulated time: see docs/collectives.md)."""
-        state = self.serve(run, step, members, "or")
-        state.joined.add(member)
-        if finished_at is not None:
-            state.timed = True
-            await self._owned(state)  # the questions it may ask belong to the step
-        if all(m != member for m, _, _ in state.claims):
-            state.claims.append((member, result, finished_at))
-        self._maybe_decide(state)
-        return (await asyncio.shield(state.decision)).to_wire()
-
-    def _maybe_decide(self, state: Step) -> None:
-        if state.decision.done():
-            # Known before this node served the step (heard, or told as a member): a
-            # successor hands that decision on, since the members that moved on with it
-            # will never ask.
-            self._tell(state)
-            return
-        if not self._heard_all(state):
-            return  # a successor decides only once every live member has said what it knows
-        lost = self._lost_in(state)
-        if lost:
-            self._decide(state, Decision("lost", lost=lost))
-            return
-        if not state.claims:
-            return
-        if state.timed:
-            self._maybe_decide_timed(state)
-            return
-        winner, result, _ = state.claims[0]
-        self._decide(state, Decision("won", winner=winner, result=result))
-
-    def _maybe_decide_timed(self, state: Step) -> None:
-        """Decide once every live member claimed or went past the earliest claimed time."""
-
-        def key(claim: tuple[str, Any, float | None]) -> tuple[float, str]:
-            return (math.inf if claim[2] is None else claim[2], claim[0])
-
-        winner, result, t = min(state.claims, key=key)
-        at = math.inf if t is None else t
-        # A member that is gone but not yet lost (on_gone's grace) may have finished first:
-        # it is waited for, and its loss then decides as in any step.
-        out = {m for m, _, _ in state.claims} | state.gone | set(state.lost)
-        pending = [
+        return {
             m
-            for m in sorted(state.members - out)
-            if state.beyond.get(m, -math.inf) < at and state.finished.get(m, -math.inf) <= at
-        ]
-        if not pending:
-            self._decide(state, Decision("won", winner=winner, result=result))
-            return
-        for member in pending:
-            # a member that finished in time: its claim is coming; one that is gone cannot say
-            if member not in state.finished and member in self.node.membership:
-                self._ask_passed(state, member, at)
+            for m in state.members
+            if m in self.node.membership
+            and m not in dropped
+            and not self._ended_before(state.run, m, state.step)
+        }
 
-    # -- the designated member: AND ----------------------------------------------------------
+    def got_through(self, run: str, step: int) -> None:
+        """This node's member got through step ``(run, step)`` (its decision known here)."""
+        self._through[run] = step
+        while len(self._through) > STEP_MEMORY:
+            del self._through[next(iter(self._through))]
 
-    async def and_done(
-        self, run: str, step: int, member: str, members: list[str], result: Any
-    ) -> Any:
-        """A member finished: record its result; answer when every live member has."""
-        state = self.serve(run, step, members)
-        state.results[member] = result
-        self._maybe_complete(state)
-        return (await asyncio.shield(state.decision)).to_wire()
+    def end_run(self, run: str) -> None:
+        """Run ``run`` ended here (its program returned, raised or was cancelled): questions
+        about its steps are answered "out" from now on, and the run's other members are told
+        (one broadcast, ``[run, step, "left"]``) that this member takes part in none of its
+        steps after ``step``, the last it got through: one that waits for it ends as if it
+        had been lost (:meth:`_member_ended`), here too."""
+        self.operations.end_run(run)
+        through = self._through.pop(run, 0)
+        self._member_ended(run, self.node.name, through)
+        if not self._closed:
+            try:
+                self.node.broadcast_nowait(DECIDED_TOPIC, [run, through, LEFT], reliable=True)
+            except MoverError as exc:  # the node is closing: its members see it go
+                log.debug("%s: run %r ended unannounced: %s", self.node.name, run, exc)
 
-    async def and_join(self, run: str, step: int, member: str, members: list[str]) -> Any:
-        """A member still in its operation saw a member of the step lost: the decision, once
-        taken (it fails the step unless the policy is ``survivors``)."""
-        state = self.serve(run, step, members)
-        state.joined.add(member)
-        self._maybe_complete(state)
-        return (await asyncio.shield(state.decision)).to_wire()
+    def _ended_before(self, run: str, member: str, step: int) -> bool:
+        """Whether ``member``'s run ``run`` ended before step ``step`` (as it said)."""
+        return self._left.get(run, {}).get(member, step) < step
 
-    def and_put(self, run: str, step: int, member: str, members: list[str], result: Any) -> None:
-        """All-to-all: a member's result, sent to every other member."""
-        state = self.serve(run, step, members, "and_all")
-        state.results[member] = result
-        self._maybe_complete(state)
+    def _member_ended(self, run: str, member: str, through: int) -> None:
+        """``member``'s run ``run`` ended after its step ``through``: every later step of the
+        run served here counts it as gone (policy ``fail``: lost; ``survivors``: not waited
+        for), whether served already or later (:meth:`serve`)."""
+        self._left.setdefault(run, {})[member] = through
+        while len(self._left) > STEP_MEMORY:
+            del self._left[next(iter(self._left))]
+        for state in list(self._steps.values()):
+            if state.run == run and state.step > through:
+                self._count_gone(state, member)
 
-    def _maybe_complete(self, state: Step) -> None:
-        if state.decision.done() or not self._heard_all(state):
-            return  # (as for an OR: a successor first hears every live member)
-        lost = self._lost_in(state)
-        if lost:
-            self._decide(state, Decision("lost", lost=lost))
-            return
-        expected = self._expected(state) | state.results.keys() & state.members
-        if self._fails(state) and not state.members <= expected:
-            return  # _member_left decides the failure
-        if expected and expected <= state.results.keys():
-            results = {m: state.results[m] for m in sorted(expected)}
-            self._decide(state, Decision("all", results=results))
+    def _settle(self, state: Step) -> None:
+        """Decide served step ``state`` if it can be, now."""
+        (self.ors if state.kind == "or" else self.ands).settle(state)
 
     def _member_left(self, name: str) -> None:
         if not self.node.connected():
             return  # we are cut off, not they: stall (see docs/collectives.md, Failures)
         self._gone.add(name)  # for the steps served from now on, too
         for state in list(self._steps.values()):
-            if not state.served or state.decision.done() or name not in state.members:
-                continue
-            state.gone.add(name)
-            if name < self.node.name and state.kind != "and_all":
-                state.takeover = True  # it may have been the designated member, and decided
-            if not self._expected(state):
-                self._decide(state, Decision("lost", lost=tuple(sorted(state.members))))
-            else:
-                self._settle(state)
+            self._count_gone(state, name, takeover=name < self.node.name)
+
+    def _count_gone(self, state: Step, name: str, *, takeover: bool = False) -> None:
+        """Member ``name`` is gone from step ``state``: if this node serves it, undecided,
+        decide it if it can be, now (``takeover``: it may have been the designated member)."""
+        if not state.served or state.decision.done() or name not in state.members:
+            return
+        state.gone.add(name)
+        if takeover and state.kind != "and_all":
+            state.takeover = True  # it may have been the designated member, and decided
+        if not self._expected(state):
+            self._decide(state, Decision("lost", lost=tuple(sorted(state.members))))
+        else:
+            self._settle(state)

@@ -19,7 +19,9 @@ from typing import TYPE_CHECKING, Any
 
 from .._exceptions import MemberLost, NotDelivered
 from ._clock import RunClock, TimedOp, hold_here
-from ._designated import AND_DONE, AND_JOIN, AND_PUT, OR_CLAIM, OR_JOIN, Collectives
+from ._designated import Collectives
+from ._designated_and import AND_DONE, AND_JOIN, AND_PUT
+from ._designated_or import OR_CLAIM, OR_JOIN
 from ._group import Settled, StepTasks
 from ._reach import Retry, wait_lost, wait_reachable
 from ._step import (
@@ -123,7 +125,7 @@ class TaskTeam:
                 members=frozenset(self.members) - {self.me},
             ) from None
         metrics.continued = time.perf_counter()
-        self._raise_lost(metrics, decision)
+        self._through(metrics, decision)
         nows: dict[str, float | None] = {}
         for member, report in decision.results.items():
             value = report.get("now") if isinstance(report, dict) else None
@@ -147,7 +149,10 @@ class TaskTeam:
                 sorted(m for m, v in nows.items() if v is None),
             )
 
-    def _raise_lost(self, metrics: StepMetrics, decision: Decision) -> None:
+    def _through(self, metrics: StepMetrics, decision: Decision) -> None:
+        """This member got through step ``metrics.step`` (its ``decision`` known here): raise
+        MemberLost if the step lost a member."""
+        self.collectives.got_through(self.run, metrics.step)
         if decision.kind == "lost":
             raise MemberLost(
                 decision.lost_message(self.run, metrics.step, self.me),
@@ -178,7 +183,7 @@ class TaskTeam:
             # As the designated member, its questions of the step: ended (and awaited) too.
             await self.collectives.step_ended(self.run, metrics.step)
             metrics.continued = time.perf_counter()
-            self._raise_lost(metrics, decision)
+            self._through(metrics, decision)
             if clock is not None:
                 # Every member has stopped its operation before any goes on: a winner that
                 # ticked at once could else let a loser's operation, not yet told, take one
@@ -316,7 +321,7 @@ class TaskTeam:
                     else:
                         decision = await self._and_all(metrics, wire)
             metrics.continued = time.perf_counter()
-            self._raise_lost(metrics, decision)
+            self._through(metrics, decision)
             if timed:
                 await self._rejoin()
         finally:
@@ -392,7 +397,7 @@ class TaskTeam:
                 except Retry:
                     await self._recover(member)
 
-        self.collectives.and_put(self.run, metrics.step, self.me, self.members, result)
+        self.collectives.ands.put(self.run, metrics.step, self.me, self.members, result)
         # Leaving waits for every send (the others need this result, even once this member
         # has all of theirs); a send that fails for good fails the step, and cancels the rest.
         async with StepTasks() as senders:
@@ -412,7 +417,7 @@ class TaskTeam:
         metrics = self._begin("rejoin")
         decision = await self._and_designated(metrics, None)
         metrics.continued = time.perf_counter()
-        self._raise_lost(metrics, decision)
+        self._through(metrics, decision)
 
     def _begin(self, kind: str) -> StepMetrics:
         self._step += 1

@@ -129,7 +129,7 @@ class Step:
     """What a node knows of step ``(run, step)``: its decision, once known here (decided here,
     announced, or told in an answer), and, once the node serves the step as its designated
     member (``served``), what it has heard from the members. Written only by the node's
-    :class:`~mover._collective._designated.Collectives`."""
+    :class:`~mover._collective._designated.Collectives` and its parts."""
 
     run: str
     step: int

@@ -16,6 +16,8 @@ loss there. The members other than ``victim`` hold in their operation until the 
               must be it), announces and blocks its loop for a moment: the decision has not
               left yet
 ``stop``      (the test SIGSTOPs it) holds in its operation, as ``inside``
+``raises``    finishes at once and gets through the step; then announces, and its program
+              raises (its process lives on): the others wait for it at the barrier
 
 With ``hold`` (seconds) the other members finish their operation then (0: a run with no
 victim, or members that reach the step after the victim is lost).
@@ -82,7 +84,7 @@ async def step(
             if kind == "or":
                 raise RuntimeError("the victim's operation fails: it never claims")
             return team.me
-        elif phase == "deciding":
+        elif phase in ("deciding", "raises"):
             return team.me
         await asyncio.sleep(HOLD)
         return team.me
@@ -94,6 +96,9 @@ async def step(
         await team.distributed_or(operation)
     else:
         await team.distributed_and(operation)
+    if me_victim and phase == "raises":
+        announce(team, "raises")
+        raise RuntimeError("the victim's program raises between steps")
     await team.distributed_and(lambda: asyncio.sleep(0))
     return f"ok {time.time()}"
 

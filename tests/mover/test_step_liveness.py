@@ -123,6 +123,33 @@ async def test_a_member_killed_at_a_phase_boundary_ends_the_step_for_all(
         assert at - signalled < ENDS_WITHIN, (member, at - signalled)
 
 
+# A member whose program raises between two steps (its process alive) says it left the run:
+# the others end at the next step at once, not after a lease (issue 22: steps that always end).
+LEFT_WITHIN = 2.0
+
+
+@pytest.mark.parametrize("victim", ["a", "c"])  # the designated member, and another
+@pytest.mark.parametrize("kind", ["and", "or"])
+async def test_a_member_whose_program_raises_between_steps_ends_the_next_for_all(
+    team: Team, kind: str, victim: str
+) -> None:
+    run = f"raises-{kind}-{victim}"
+    args = {"kind": kind, "victim": victim, "phase": "raises", "hold": 0}
+    await launch(team.node, "step", NAMES, args, run=run, wait=False)
+    line = await first_line(team.procs[victim], lambda s: s.startswith(f"PHASE {run} "), 20)
+    assert line is not None and line.split()[2] == "raises", line
+    raised = time.monotonic()
+    ends = await ended(team.node, run, NAMES, LEFT_WITHIN + 5)
+    assert "RuntimeError" in ends[victim][0].get("error", ""), ends[victim]  # its own error
+    for member, (outcome, at) in ends.items():
+        print(f"{run}: {member} ended after {at - raised:.2f} s: {outcome}")
+        if member != victim:
+            assert "MemberLost" in outcome.get("error", ""), (member, outcome)
+            assert f"'{victim}'" in outcome["error"], (member, outcome)
+            assert at - raised < LEFT_WITHIN, (member, at - raised)
+    assert victim in team.node.membership  # it left the run, not the team
+
+
 @pytest.mark.parametrize(
     ("kind", "victim", "policy"),
     [("and", "c", "fail"), ("or", "a", "fail"), ("and", "c", "survivors")],
