@@ -24,14 +24,22 @@ Job = TypeVar("Job")
 log = logging.getLogger(__name__)
 
 
-def add_saved_arguments(parser: argparse.ArgumentParser, default_save: str) -> None:
+def default_save(runner: str) -> Path:
+    """Where ``runner`` saves its runs unless told: ``out/RUNNER/runs``, outside the tracked
+    ``results/`` (the published runs are written only by an explicit ``--save results/...``)."""
+    return Path("out") / runner / "runs"
+
+
+def add_saved_arguments(parser: argparse.ArgumentParser, runner: str) -> None:
     """``--save DIR``, ``--no-save``, ``--json`` and ``--quiet``: the options of a runner whose
     runs are saved per point (its ``--workers`` comes with ``--runs``, from ``_common``)."""
+    where = default_save(runner)
     parser.add_argument(
         "--save",
         type=Path,
-        default=Path(default_save),
-        help=f"per-point JSON-lines directory, read back and added to (default {default_save})",
+        default=where,
+        help=f"per-point JSON-lines directory, read back and added to (default {where}; the "
+        "published runs: --save results/" + runner + "/runs)",
     )
     parser.add_argument("--no-save", action="store_true", help="keep no per-point files")
     parser.add_argument("--json", action="store_true", help="end with one JSON line of every run")
@@ -54,6 +62,34 @@ def load_runs(path: Path | None, seed: int) -> dict[int, Record]:
         except (ValueError, KeyError, TypeError, AttributeError):
             log.warning("%s:%d: not a saved run, skipped", path, number)
     return got
+
+
+def saved_seeds(folder: Path) -> dict[int, dict[str, int]]:
+    """The master seeds whose runs ``folder`` holds: per seed, the runs saved per point (the
+    file's stem), read as :func:`load_runs` reads them."""
+    seeds: dict[int, dict[str, int]] = {}
+    for path in sorted(folder.glob("*.jsonl")) if folder.is_dir() else []:
+        for line in path.read_text().splitlines():
+            try:
+                seed = json.loads(line)["seed"]
+            except (ValueError, KeyError, TypeError):
+                continue  # load_runs names it when the runs are read
+            if isinstance(seed, int):
+                per = seeds.setdefault(seed, {})
+                per[path.stem] = per.get(path.stem, 0) + 1
+    return dict(sorted(seeds.items()))
+
+
+def seeds_table(folder: Path) -> str:
+    """What ``--saved`` without ``--seed`` prints: each saved seed with its points' run counts."""
+    seeds = saved_seeds(folder)
+    if not seeds:
+        return f"no runs saved in {folder}"
+    lines = [f"seeds saved in {folder} (pick one with --seed N):"]
+    for seed, per in seeds.items():
+        counts = ", ".join(f"{point} {n}" for point, n in per.items())
+        lines.append(f"  {seed}: {sum(per.values())} runs ({counts})")
+    return "\n".join(lines)
 
 
 def run_pool(

@@ -11,7 +11,7 @@ from mover.cli import UsageError
 
 from .._common import add_run_arguments, comma_list, read_run_arguments, runner_parser
 from .._figures import add_figure_arguments
-from .._saved import add_saved_arguments
+from .._saved import add_saved_arguments, seeds_table
 from . import _report
 from ._sweep import FIGURES, EyebotSettings, points, run_points
 
@@ -44,9 +44,10 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser.add_argument(
         "--saved",
         action="store_true",
-        help="report the saved runs only (at most --runs a point), making none",
+        help="report the saved runs of --seed only (at most --runs a point), making none; "
+        "without --seed, list the seeds saved",
     )
-    add_saved_arguments(parser, "results/eyebot/runs")
+    add_saved_arguments(parser, "eyebot")
     add_figure_arguments(parser)
     parser.set_defaults(func=run)
 
@@ -77,6 +78,9 @@ def settings(args: argparse.Namespace) -> EyebotSettings:
 def run(args: argparse.Namespace) -> int:
     """Run the figures' points; print the seed, each figure's table, the speed."""
     s = settings(args)
+    if s.saved_only and args.seed is None and s.save is not None:
+        print(seeds_table(s.save))
+        return 0
     print(f"seed: {s.seed}")
     print(f"figures: {','.join(s.figures)}  runs per point: {s.runs}  duration: {s.duration:g} s")
     if s.save is not None:

@@ -87,7 +87,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         action="store_true",
         help="L+P: a robot is repelled by the targets it marked itself too (the paper: others)",
     )
-    add_saved_arguments(parser, "results/levy/runs")
+    add_saved_arguments(parser, "levy")
     add_figure_arguments(parser)
     parser.set_defaults(func=run)
 

@@ -68,24 +68,17 @@ def scene_header(world: World) -> dict[str, Any]:
     }
 
 
-class Recorder:
-    """Writes ``world``'s run to ``path``, every ``every``-th tick: a hook on the door's
-    ``on_tick`` (``server.door.on_tick.append(recorder)``)."""
+class JsonLinesSink:
+    """Writes records as JSON lines: one of the two formats of a :class:`Recorder` (the other
+    is MCAP, :class:`sim_hw.continuous._mcap.McapSink`)."""
 
-    def __init__(self, path: str | Path, world: World, every: int = 1) -> None:
-        self.path = Path(path)
-        self.world = world
-        self.every = max(1, every)
-        self._file: IO[str] = self.path.open("w", encoding="utf-8")
-        self._write(scene_header(world))
-        self._write({"type": "tick", **world.snapshot(), "commands": {}})
+    sensors = False  # a tick's sensor readings are not kept (the commands replay them)
 
-    def __call__(self, commands: Mapping[str, Mapping[str, Any]]) -> None:
-        world = self.world
-        if world.tick % self.every == 0:
-            self._write({"type": "tick", **world.snapshot(), "commands": dict(commands)})
+    def __init__(self, path: str | Path) -> None:
+        self._file: IO[str] = Path(path).open("w", encoding="utf-8")  # noqa: SIM115
 
-    def _write(self, record: dict[str, Any]) -> None:
+    def write(self, record: Mapping[str, Any]) -> None:
+        """Write one record as a line."""
         self._file.write(json.dumps(record, separators=(",", ":")) + "\n")
 
     def close(self) -> None:
@@ -94,12 +87,66 @@ class Recorder:
             self._file.close()
 
 
+def open_sink(path: str | Path) -> Any:
+    """The writer of ``path``'s format, which its suffix picks: ``.mcap`` is MCAP with ROS 2
+    messages (the ``mcap`` extra), anything else JSON lines."""
+    if Path(path).suffix == ".mcap":
+        from ._mcap import McapSink
+
+        return McapSink(path)
+    return JsonLinesSink(path)
+
+
+class Recorder:
+    """Writes ``world``'s run to ``path``, every ``every``-th tick: a hook on the door's
+    ``on_tick`` (``server.door.on_tick.append(recorder)``). The suffix picks the format
+    (:func:`open_sink`)."""
+
+    def __init__(self, path: str | Path, world: World, every: int = 1) -> None:
+        self.path = Path(path)
+        self.world = world
+        self.every = max(1, every)
+        self._sink = open_sink(self.path)
+        self._sink.write(scene_header(world))
+        self._write({"type": "tick", **world.snapshot(), "commands": {}})
+
+    def __call__(self, commands: Mapping[str, Mapping[str, Any]]) -> None:
+        world = self.world
+        if world.tick % self.every == 0:
+            self._write({"type": "tick", **world.snapshot(), "commands": dict(commands)})
+
+    def _write(self, record: dict[str, Any]) -> None:
+        if self._sink.sensors:
+            record["sensors"] = {rid: self._sensors(rid) for rid in record["robots"]}
+        self._sink.write(record)
+
+    def _sensors(self, rid: str) -> dict[str, Any]:
+        robot = self.world.robots[rid]
+        got = robot.readings
+        sonar = robot.parts.spec.sonar
+        return {
+            "odom": got.get("odom"),
+            "sonar": got.get("sonar"),
+            "angles": list(robot.angles),
+            "range_max": sonar.max_range if sonar else 0.0,
+        }
+
+    def close(self) -> None:
+        """Flush and close the file."""
+        self._sink.close()
+
+
 def read_recording(path: str | Path) -> tuple[dict[str, Any], list[dict[str, Any]]]:
     """The header and the tick records of a recording.
 
     A last line cut short (the world was killed while writing it) is left out with one warning;
-    any other line that is not a record is a ValueError naming it.
+    any other line that is not a record is a ValueError naming it. A ``.mcap`` file is read as
+    MCAP (:func:`sim_hw.continuous._mcap.read_mcap`).
     """
+    if Path(path).suffix == ".mcap":
+        from ._mcap import read_mcap
+
+        return read_mcap(path)
     header: dict[str, Any] | None = None
     ticks: list[dict[str, Any]] = []
     cut: tuple[int, str] | None = None  # a line that did not parse: fine only if it is the last

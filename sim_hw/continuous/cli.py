@@ -38,7 +38,12 @@ def register_world(sub: Any) -> None:
         default=1.0,
         help="real-time mode: simulated seconds per wall second (default 1)",
     )
-    p.add_argument("--record", metavar="FILE", help="record the run as JSON lines")
+    p.add_argument(
+        "--record",
+        metavar="FILE",
+        help="record the run: as MCAP with ROS 2 messages if FILE ends in .mcap (the mcap "
+        "extra), else as JSON lines",
+    )
     p.add_argument("--until", type=positive, metavar="T", help="stop at simulated time T")
     p.add_argument(
         "--state-rate",
@@ -130,9 +135,9 @@ def register_replay(sub: Any) -> None:
     p.add_argument("file", metavar="FILE", help="a recording made with mover world --record")
     p.add_argument(
         "--out",
-        metavar="PNG|RRD",
-        help="write the trajectories to a .png, or the replay to a .rrd file, instead of "
-        "showing it",
+        metavar="PNG|RRD|MCAP",
+        help="write the trajectories to a .png, the replay to a .rrd file, or the recording "
+        "as MCAP with ROS 2 messages (.mcap), instead of showing it",
     )
     add_viewer_arguments(p)
     p.set_defaults(func=run_replay)
@@ -146,14 +151,19 @@ def run_replay(args: argparse.Namespace) -> int:
     if not Path(args.file).is_file():
         raise UsageError(f"{args.file}: no such file")
     out = None if args.out is None else str(args.out)
-    if out is not None and not out.endswith((".png", ".rrd")):
-        raise UsageError(f"--out must name a .png or .rrd file, got {args.out!r}")
+    if out is not None and not out.endswith((".png", ".rrd", ".mcap")):
+        raise UsageError(f"--out must name a .png, .rrd or .mcap file, got {args.out!r}")
     try:
-        if out is None or out.endswith(".rrd"):
+        if out is not None and out.endswith(".mcap"):
+            from ._mcap import export
+
+            export(args.file, out)
+        elif out is None or out.endswith(".rrd"):
             from sim_hw.view.cli import replay
 
             return replay(args.file, port=args.port, bind=args.bind, rrd=out)
-        plot_recording(args.file, out)
+        else:
+            plot_recording(args.file, out)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     except OSError as exc:

@@ -130,4 +130,6 @@ def test_replay_refuses_other_outputs(tmp_path: Path, capsys: pytest.CaptureFixt
     rec.write_text("\n".join(_lines([_tick(0, 1.0)])) + "\n")
     assert main(["replay", str(rec), "--out", str(tmp_path / "x.jpg")]) == 2
     err = [ln for ln in capsys.readouterr().err.splitlines() if ln.startswith("mover replay")]
-    assert err == [f"mover replay: --out must name a .png or .rrd file, got '{tmp_path}/x.jpg'"]
+    assert err == [
+        f"mover replay: --out must name a .png, .rrd or .mcap file, got '{tmp_path}/x.jpg'"
+    ]
