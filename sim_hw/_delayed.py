@@ -13,6 +13,12 @@ tick, in id order, whatever the wall clock did; a robot waits for the readings a
 tick, never later ones. The world waits for a robot's commands from the tick it joined or
 woke at (the ticks before apply its standing command: stopped, if it was idle).
 
+A tick runs only if some robot's command asks for it: one due at it, or one handed in for it
+or a later tick. So the ticks no awake robot's command is due at (after a wake or a join) do
+not run at whichever call happens to come first (a timer, an idle), and once every robot idles
+the world still applies the commands handed in before (else where it stopped, and so the tick
+the robots wake at, hung on the order of the idles: docs/reproducible-runs.md).
+
 Cost: the readings of K + 1 ticks (references to what the world built anyway) and a dict of
 commands a tick.
 """
@@ -85,22 +91,22 @@ class Delayed(Schedule):
             self.door.arm()
 
     def pump(self) -> None:
-        """Run every tick whose commands are in (ticks before k apply none); with no robot to
-        wait for, place the robots waiting to join."""
+        """Run every tick whose commands are in and that a command asks for (see the module;
+        ticks before k apply none); with no robot to wait for, place the robots waiting to
+        join."""
         door = self.door
         if not door.started:
             return
         st = door.stepper
         while not door.closed:
-            waited = len(st.robots()) - len(door.idles)
-            if waited <= 0:
-                break
             need = st.tick - self.k
-            if need >= 0:
-                got = self.queue.get(need, {})
+            due = len(st.robots()) - len(door.idles) - self._late(need) if need >= 0 else 0
+            if due > 0:
                 # counting first: the scan runs once a tick, not once a command
-                if len(got) < waited - self._late(need) or self._missing():
+                if len(self.queue.get(need, {})) < due or self._missing():
                     break
+            elif not any(t >= need for t in self.queue):
+                break  # no command due nor still to apply: nothing asks for this tick
             door.run_tick(self.queue.pop(need, {}))
             self.history.append((st.tick, {r: st.readings(r) for r in st.robots()}))
             self.since = {r: t for r, t in self.since.items() if t > need}
@@ -117,7 +123,7 @@ class Delayed(Schedule):
         self.since[robot] = self.door.stepper.tick
 
     def started(self) -> None:
-        """The world started: run the ticks that apply no command yet."""
+        """The world started: nothing to run until a command asks for a tick."""
         self.pump()
 
     def expire(self) -> None:

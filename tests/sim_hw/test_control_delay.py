@@ -78,3 +78,30 @@ def test_a_delay_is_for_lock_step_worlds_whose_robots_act_together() -> None:
         WorldServer(world, lockstep=False, control_delay=2)
     with pytest.raises(ValueError, match="whole number"):
         Delayed(0)
+
+
+async def _stopped_at(first_idle: str) -> int:
+    """Robot a three ticks ahead of b (K = 2), then both idle, ``first_idle`` first: the tick
+    the world stops at."""
+    world = World(WorldSpec(size=(4.0, 4.0), name="delay"), seed=1)
+    server = WorldServer(world, expect=2, control_delay=2)
+    a, b = await asyncio.gather(
+        in_process(server, "a", {"pose": [1.0, 1.0, 0.0]}),
+        in_process(server, "b", {"pose": [3.0, 3.0, 0.0]}),
+    )
+    for _ in range(3):
+        await asyncio.gather(a.clock.tick(), b.clock.tick())
+    for _ in range(2):
+        await a.clock.tick()  # a's commands for ticks 3 and 4 are in, b's up to 2
+    stop = {"v": 0.0, "w": 0.0, "push": None}
+    for robot in (first_idle, "b" if first_idle == "a" else "a"):
+        server.door.idle(robot, stop)
+    tick = world.tick
+    await server.door.aclose()
+    return tick
+
+
+async def test_where_the_world_stops_when_all_idle_is_not_the_order_of_the_idles() -> None:
+    """It applies every command handed in before (else, a idling first, it stopped where b's
+    commands ended, and the robots woke two ticks earlier)."""
+    assert await _stopped_at("a") == await _stopped_at("b") == 7
