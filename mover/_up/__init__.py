@@ -111,7 +111,11 @@ def _check(plan: TeamPlan) -> int:
     if plan.topology == "auto":
         topology += "router" if needs_router(n) else "peer mesh"
     world = f"{plan.world.kind} world {plan.world.file}" if plan.world else "no world"
-    print(f"{plan.source}: team {plan.name!r}, {n} members ({topology}), {world}")
+    started = len(plan.members) + (plan.world is not None)
+    print(
+        f"{plan.source}: team {plan.name!r}, {started} processes and mover up itself: "
+        f"{n} members ({topology}), {world}"
+    )
     for m in plan.members:
         print(
             f"  {m.name}: {m.kind}, hardware {m.hardware}" + (" (required)" if m.required else "")
