@@ -42,6 +42,7 @@ def test_the_programs_are_registered() -> None:
         "explore_maze",
         "levy_search",
         "stigmergic_navigation",
+        "teleop",
     }
     assert all(inspect.iscoroutinefunction(p) for p in found.values())
     # every module of the package is a program, installed under the module's name
