@@ -14,13 +14,20 @@ TESTS ?=
 
 .PHONY: demo lint check test coverage bench docs clean
 
-$(STAMP): pyproject.toml
+# The demo needs mover alone (no viewer, no test tools); every other target the test extra.
+BASE := $(VENV)/.base
+
+$(BASE): pyproject.toml
 	python3 -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
+	$(PY) -m pip install -q -e .
+	touch $(BASE)
+
+$(STAMP): $(BASE)
 	$(PY) -m pip install -q -e '.[test]'
 	touch $(STAMP)
 
-demo: $(STAMP)
+demo: $(BASE)
 	$(VENV)/bin/mover demo
 
 lint: $(STAMP)

@@ -40,6 +40,7 @@ if TYPE_CHECKING:
     from ._session import SessionState
 
 log = logging.getLogger("mover.rpc")
+TOOL_PROBES = frozenset({"mover.status", "mover.programs"})  # answered unknown quietly
 
 F = TypeVar("F", bound=Callable[..., Any])
 _MARK = "__mover_procedure__"
@@ -176,7 +177,9 @@ class RpcServer:
         name, args, kwargs = payload
         exported = self.exports.get(name)
         if exported is None:
-            log.warning("%s: %r called unknown procedure %r", self.state.name, env.sender, name)
+            # a tool asking a member that hosts no programs (`mover ps`) is not a fault here
+            say = log.debug if name in TOOL_PROBES else log.warning
+            say("%s: %r called unknown procedure %r", self.state.name, env.sender, name)
             known = ", ".join(sorted(self.exports)) or "none"
             return _err(
                 "UnknownProcedure",

@@ -127,7 +127,11 @@ def _check(plan: TeamPlan) -> int:
     if plan.topology == "auto":
         topology += "router" if needs_router(n) else "peer mesh"
     world = f"{plan.world.kind} world {plan.world.file}" if plan.world else "no world"
-    print(f"{plan.source}: team {plan.name!r}, {n} members ({topology}), {world}")
+    started = len(plan.members) + (plan.world is not None)
+    print(
+        f"{plan.source}: team {plan.name!r}, {started} processes and mover up itself: "
+        f"{n} members ({topology}), {world}"
+    )
     for h in plan.hosts:
         role = f"router at {_hosts.endpoint(plan)}, " if h.router else ""
         on = [m.name for m in plan.members if m.host == h.name]

@@ -14,6 +14,7 @@ relative to the file.
 
 from __future__ import annotations
 
+import tomllib
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -300,6 +301,8 @@ def _group(g: Table, world: WorldPlan | None, *, robot: bool) -> list[MemberPlan
     target = g.option("world", NAME) or (world.name if world is not None else None)
     if hardware == "none":
         target = None
+    if world is not None and target == world.name and hardware == "sim" and not poses:
+        _in_world(g, names, world)
     return [
         MemberPlan(
             name,
@@ -313,6 +316,21 @@ def _group(g: Table, world: WorldPlan | None, *, robot: bool) -> list[MemberPlan
         )
         for i, name in enumerate(names)
     ]
+
+
+def _in_world(g: Table, names: list[str], world: WorldPlan) -> None:
+    """Each robot placed by the world is one of its file's ``[[robots]]`` (a misspelt name
+    would get a default body); a world file that lists none places any name."""
+    try:
+        listed = tomllib.loads(world.file.read_text()).get("robots", [])
+        bodies = [str(r["id"]) for r in listed if isinstance(r, dict) and "id" in r]
+    except (OSError, ValueError, TypeError):
+        return  # the world's own reader says what is wrong with its file
+    for i, name in enumerate(names):
+        if bodies and name not in bodies:
+            key: str | KeyPath = ("names", i) if g.has("names") else "prefix"
+            problem = f"{name!r} is not a robot of {world.file.name}{hint(name, bodies)}"
+            raise g.fail(key, f"{problem}; its robots: {', '.join(bodies)}")
 
 
 def _names(g: Table) -> list[str]:

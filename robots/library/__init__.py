@@ -6,7 +6,7 @@ function or small class of readings → command, testable without a world.
 
 * search and recognition — :func:`search` (random walk, section 4.1), :func:`movable` (the push
   test), :func:`sees` (camera recognition), :func:`recognition` (by name), :class:`Found`,
-  :class:`Wander`;
+  :class:`Wander`; a search limited to a region — :data:`Region`, :class:`Rect`;
 * navigation — :func:`goto_object`, :func:`goto_point`, :func:`steer`, :func:`detour`,
   :func:`station`;
 * manipulation — :func:`pusher`, :func:`steerer`, :class:`Path`, :func:`stations`,
@@ -20,6 +20,7 @@ function or small class of readings → command, testable without a world.
 
 from robots.hal import MARK, MARKED
 
+from ._geometry import Rect, Region
 from ._goto import (
     approach,
     detour,
@@ -93,6 +94,8 @@ __all__ = [
     "Neighbour",
     "Path",
     "Predicate",
+    "Rect",
+    "Region",
     "Wander",
     "align",
     "approach",

@@ -3,10 +3,57 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 
 Point = tuple[float, float]
 Pose = tuple[float, float, float]
+
+Region = Callable[[Point], bool]
+"""A predicate on positions (x, y in the odometry frame): where a procedure may go or find.
+
+Any function of a point will do (``lambda p: p[0] > 0``); :class:`Rect` is one that also knows
+its centre, so a walk started outside it can find its way in.
+"""
+
+
+@dataclass(frozen=True)
+class Rect:
+    """An axis-aligned rectangle, usable as a :data:`Region`: ``Rect(0, 0, 4, 4)((1, 2))``.
+
+    :meth:`split` cuts it into a grid, e.g. the four quadrants of an arena for four robots.
+    """
+
+    x_min: float
+    y_min: float
+    x_max: float
+    y_max: float
+
+    def __call__(self, point: Sequence[float]) -> bool:
+        """Whether ``point`` (a point or a pose) lies inside, edges included."""
+        return self.x_min <= point[0] <= self.x_max and self.y_min <= point[1] <= self.y_max
+
+    @property
+    def centre(self) -> Point:
+        """The rectangle's centre."""
+        return ((self.x_min + self.x_max) / 2.0, (self.y_min + self.y_max) / 2.0)
+
+    def split(self, columns: int = 2, rows: int = 2) -> list[Rect]:
+        """The rectangle cut into ``columns`` × ``rows`` equal cells, row by row from
+        (x_min, y_min): ``split()`` gives the quadrants south-west, south-east, north-west,
+        north-east."""
+        w = (self.x_max - self.x_min) / columns
+        h = (self.y_max - self.y_min) / rows
+        return [
+            Rect(
+                self.x_min + i * w,
+                self.y_min + j * h,
+                self.x_min + (i + 1) * w,
+                self.y_min + (j + 1) * h,
+            )
+            for j in range(rows)
+            for i in range(columns)
+        ]
 
 
 def wrap(angle: float) -> float:

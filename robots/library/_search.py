@@ -18,7 +18,7 @@ from typing import Any, NamedTuple, Protocol
 from robots._robot import Robot
 from robots.hal import BumperSide, Sighting
 
-from ._geometry import Point, Pose, ahead, clip, distance, wrap
+from ._geometry import Point, Pose, Rect, Region, ahead, bearing_to, clip, distance, wrap
 from ._goto import approach, turn_to
 
 
@@ -61,6 +61,10 @@ class Wander:
     the bumper touches something (the caller then tests it and calls :meth:`rejected` if it
     is not wanted). A side or rear contact, or a rejected object, makes the robot back off and
     turn to a random heading away from it. Sonar only slows the approach, so contact is gentle.
+
+    With a ``region`` (a :data:`Region`, a predicate on positions), a walk that finds itself
+    outside turns back toward the centre of a :class:`Rect`, or else the mean of the positions
+    it has held inside the region, within ``reenter`` rad of it, and wanders on from there.
     """
 
     def __init__(
@@ -73,8 +77,13 @@ class Wander:
         gain: float = 2.5,
         max_turn: float = 1.5,
         backoff: float = 0.25,
+        region: Region | None = None,
+        reenter: float = 0.5,
     ) -> None:
         self.rng = rng
+        self.region, self.reenter = region, reenter
+        self._inside: Point | None = None  # the mean of the positions held inside
+        self._inside_n = 0
         self.speed, self.creep, self.slow_range = speed, creep, slow_range
         self.gain, self.max_turn, self.backoff = gain, max_turn, backoff
         self.mode = "start"
@@ -95,12 +104,31 @@ class Wander:
         self._back_from = (pose[0], pose[1])
         self._away = pose[2] if direction is None else direction
 
+    def _keep_in(self, pose: Pose) -> None:
+        # outside the region and heading away from it: aim back (not while backing off a
+        # contact, so that it still leaves what it touched)
+        assert self.region is not None
+        if self.region(pose[:2]):
+            n = self._inside_n = self._inside_n + 1
+            x, y = self._inside or (0.0, 0.0)
+            self._inside = (x + (pose[0] - x) / n, y + (pose[1] - y) / n)
+            return
+        back = self.region.centre if isinstance(self.region, Rect) else self._inside
+        if back is None or self.mode == "back":
+            return
+        towards = wrap(bearing_to(pose, back) + pose[2])
+        if abs(wrap(self.goal - towards)) > self.reenter:
+            self.goal = wrap(towards + float(self.rng.uniform(-self.reenter, self.reenter)))
+            self.mode = "turn"
+
     def step(self, pose: Pose, bump: BumperSide | None, front: float) -> tuple[str, float, float]:
         """The next command from the dead-reckoned pose, the bumper and the front sonar range."""
         heading = pose[2]
         if self.mode == "start":
             self.goal = float(self.rng.uniform(-math.pi, math.pi))
             self.mode = "turn"
+        if self.region is not None:
+            self._keep_in(pose)
         if self.mode == "back":
             self._back_steps += 1
             far = distance(pose, self._back_from) >= self.backoff
@@ -185,15 +213,19 @@ async def search(
     *,
     wander: Wander | None = None,
     radius: float = 0.15,
+    region: Region | None = None,
 ) -> Found | None:
     """Random-walk until an object passing ``predicate`` is found (section 4.3, ``search``).
 
     ``terminator`` is polled every tick; when it returns True the search gives up and returns
-    None. The motors are stopped on the way out, also when the search is cancelled (a lost
+    None. ``region`` (a :data:`Region`: a :class:`Rect` or any predicate on positions) limits
+    the search: the walk keeps inside it, and a thing bumped whose estimated centre lies
+    outside is left untested (a ``wander`` of one's own keeps to its own ``region``). The
+    motors are stopped on the way out, also when the search is cancelled (a lost
     ``distributed_or``).
     """
     hw = robot.hw
-    walk = wander or Wander(rng if rng is not None else random.Random(robot.id))
+    walk = wander or Wander(rng if rng is not None else random.Random(robot.id), region=region)
     bumper = hw.bumper
     try:
         while terminator is None or not terminator():
@@ -205,7 +237,7 @@ async def search(
                 await hw.clock.tick()
                 here = hw.odometry.pose()
                 oid, where = locate(here, _sightings(robot), radius)
-                if await predicate(robot):
+                if (region is None or region(where)) and await predicate(robot):
                     robot.log.info("found %s at %.2f, %.2f", oid, *where)
                     return Found(oid, where, here)
                 walk.rejected(hw.odometry.pose(), here[2])

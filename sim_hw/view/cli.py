@@ -83,8 +83,9 @@ def _say(verb: str) -> Any:
 
 def run_view(args: argparse.Namespace) -> int:
     """Show a running world until interrupted."""
-    from ._server import ViewerServer
+    from ._server import ViewerServer, rerun_binary
 
+    rerun_binary()  # rerun-sdk is there (the view extra), else one line before anything else
     record = Path(args.record) if args.record else None
     if record is not None and (record.suffix != ".rrd" or not record.parent.is_dir()):
         raise UsageError(f"--record must name a .rrd file in an existing folder, got {args.record}")
@@ -127,11 +128,11 @@ def replay(path: str, *, port: int, bind: str, rrd: str | None = None) -> int:
 
     from ._server import rerun_binary
 
+    rerun_binary()  # rerun-sdk is there, else one line
     header, ticks = read_recording(path)
     header = {**header, "kind": "continuous"}
     names = {r for t in ticks for r in t.get("robots", {})}
     say = _say("replay")
-    rerun_binary()  # rerun-sdk is there, else one line
     if rrd is not None:
         _log_recording(header, ticks, names, grpc_url=None, save=Path(rrd))
         say(f"{rrd}: {len(ticks)} ticks")

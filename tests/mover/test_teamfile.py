@@ -252,7 +252,8 @@ def test_check_prints_the_plan_and_starts_nothing(tmp_path: Path) -> None:
     assert done.returncode == 0, done.stderr
     lines = done.stdout.splitlines()
     assert lines[0] == (
-        f"{tmp_path / 't.toml'}: team 'alpha', 7 members (auto: peer mesh), "
+        f"{tmp_path / 't.toml'}: team 'alpha', 6 processes and mover up itself: 7 members "
+        "(auto: peer mesh), "
         f"continuous world {tmp_path / 'arena.toml'}"
     )
     assert "  scout: scout, hardware sim (required)" in lines

@@ -11,6 +11,7 @@ from robots.hal import BumperSide, Sighting
 from robots.library import (
     Found,
     Path,
+    Rect,
     Wander,
     align,
     detour,
@@ -72,6 +73,58 @@ def test_wander_backs_off_a_rejected_object_then_heads_away() -> None:
     walk.step((1.0 - walk.backoff, 0.0, 0.0), None, 0.3)
     assert walk.mode == "turn"
     assert math.cos(walk.goal) < math.cos(math.pi - 1.2) + 1e-9  # within 1.2 rad of -x
+
+
+def test_rect_is_a_region_and_splits_into_quadrants() -> None:
+    arena = Rect(0.0, 0.0, 6.0, 4.0)
+    assert arena((6.0, 0.0)) and arena((1.0, 2.0, 0.5)) and not arena((6.1, 2.0))
+    sw, se, nw, ne = arena.split()
+    assert (sw, ne) == (Rect(0.0, 0.0, 3.0, 2.0), Rect(3.0, 2.0, 6.0, 4.0))
+    assert se.centre == (4.5, 1.0) and nw.centre == (1.5, 3.0)
+
+
+def heading_off(
+    walk: Wander, pose: tuple[float, float, float], target: tuple[float, float]
+) -> float:
+    return abs(
+        math.remainder(walk.goal - math.atan2(target[1] - pose[1], target[0] - pose[0]), math.tau)
+    )
+
+
+def test_wander_outside_its_rect_turns_back_toward_the_centre() -> None:
+    walk = Wander(random.Random(5), region=Rect(0.0, 0.0, 2.0, 2.0))
+    walk.step((1.0, 1.0, 0.0), None, 3.0)
+    walk.goal, walk.mode = 0.0, "drive"  # heading east, out through x = 2
+    assert walk.step((1.9, 1.0, 0.0), None, 3.0) == ("drive", walk.speed, 0.0)  # still inside
+    outside = (2.2, 1.0, 0.0)
+    action, v, _ = walk.step(outside, None, 3.0)
+    assert walk.mode == "turn" and (action, v) == ("drive", 0.0)  # it turns on the spot
+    assert heading_off(walk, outside, (1.0, 1.0)) <= walk.reenter
+
+
+def test_wander_started_outside_its_rect_heads_in() -> None:
+    walk = Wander(random.Random(6), region=Rect(4.0, 4.0, 6.0, 6.0))
+    walk.step((0.0, 0.0, 0.0), None, 3.0)
+    assert heading_off(walk, (0.0, 0.0, 0.0), (5.0, 5.0)) <= walk.reenter
+
+
+def test_wander_outside_a_predicate_heads_back_to_where_it_was_inside() -> None:
+    walk = Wander(random.Random(7), region=lambda p: p[1] < 1.0)  # south of y = 1, no centre
+    walk.step((0.0, 0.0, 0.0), None, 3.0)
+    for x in (0.0, 0.5, 1.0):  # it held (0.5, 0.5) inside on average
+        walk.step((x, 0.5 * x + 0.25, 0.0), None, 3.0)
+    walk.goal, walk.mode = math.pi / 2, "drive"
+    outside = (1.0, 1.5, math.pi / 2)
+    walk.step(outside, None, 3.0)
+    assert heading_off(walk, outside, (0.5, 0.5)) <= walk.reenter
+
+
+def test_wander_backs_off_a_contact_outside_its_region_before_turning_back() -> None:
+    walk = Wander(random.Random(8), region=Rect(0.0, 0.0, 2.0, 2.0))
+    walk.step((1.0, 1.0, 0.0), None, 3.0)
+    walk.rejected((2.3, 1.0, 0.0))
+    action, v, _ = walk.step((2.3, 1.0, 0.0), None, 0.0)
+    assert walk.mode == "back" and action == "drive" and v < 0
 
 
 @pytest.mark.parametrize("side", ["left", "right"])

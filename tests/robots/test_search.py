@@ -8,7 +8,17 @@ import random
 import pytest
 
 from robots import Robot
-from robots.library import Predicate, approach, kind_ahead, locate, movable, search, sees
+from robots.library import (
+    Predicate,
+    Rect,
+    Region,
+    approach,
+    kind_ahead,
+    locate,
+    movable,
+    search,
+    sees,
+)
 from sim_hw import BoxSpec, ImmovableSpec, World, WorldSpec
 
 from .conftest import robots_in
@@ -132,3 +142,59 @@ async def test_search_with_the_push_test_finds_the_crate(seed: int) -> None:
     assert checks[-1] == ("crate", True)
     assert all(not ok for _, ok in checks[:-1])
     assert {"victim", "pillar", "wall"} <= {what for what, _ in checks}
+
+
+# Two crates in opposite quadrants of a square arena, the robot between them at the centre.
+QUADRANTS = WorldSpec(
+    size=(6.0, 6.0),
+    boxes=(
+        BoxSpec("south_west", (1.5, 1.5), (0.4, 0.4), 5.0),
+        BoxSpec("north_east", (4.5, 4.5), (0.4, 0.4), 5.0),
+    ),
+)
+
+
+ARENA = Rect(0.0, 0.0, 6.0, 6.0)
+
+
+def north_west(p: tuple[float, float]) -> bool:
+    """A region given as a plain predicate on positions (no centre to aim at)."""
+    return p[0] <= 3.0 and p[1] >= 3.0
+
+
+@pytest.mark.parametrize(
+    ("region", "crate"),
+    [(ARENA.split()[0], "south_west"), (ARENA.split()[3], "north_east"), (north_west, None)],
+    ids=["quadrant-sw", "quadrant-ne", "predicate-nw"],
+)
+async def test_a_search_limited_to_a_quadrant_stays_there_and_finds_only_its_crate(
+    region: Region, crate: str | None
+) -> None:
+    world = World(QUADRANTS, seed=2)
+    server, robots = await robots_in(world, {"r": {"pose": [3.0, 3.0, 0.0]}})
+    robot = robots["r"]
+    path: list[tuple[float, float]] = []
+    tested: list[str | None] = []
+
+    def give_up() -> bool:
+        path.append(robot.hw.odometry.pose()[:2])
+        return robot.hw.clock.now() > 300
+
+    async def spy(robot: Robot) -> bool:
+        tested.append(kind_ahead(robot.hw.camera.sightings() if robot.hw.camera else ()))
+        return await sees("box")(robot)
+
+    found = await search(robot, spy, give_up, random.Random(2), region=region)
+    print(f"\n{crate}: {robot.hw.clock.now():.1f} s, tested {tested}")
+    await server.door.aclose()
+    assert (found and found.object_id) == crate
+    assert "box" not in tested[:-1] and (crate is not None or "box" not in tested)
+    # it starts on the corner of all four; once well inside its quadrant, it stays near
+    box = region if isinstance(region, Rect) else ARENA.split()[2]
+    x0, y0, x1, y1 = box.x_min, box.y_min, box.x_max, box.y_max
+    deep = Rect(x0 + 0.3, y0 + 0.3, x1 - 0.3, y1 - 0.3)
+    wide = Rect(x0 - 0.4, y0 - 0.4, x1 + 0.4, y1 + 0.4)  # a turn's worth
+    after = path[[deep(p) for p in path].index(True) :]
+    print(f"{sum(map(region, after))} of {len(after)} ticks in, the rest within 0.4 m")
+    assert all(wide(p) for p in after)
+    assert sum(map(region, after)) > 0.85 * len(after)
