@@ -231,6 +231,11 @@ def register_call(sub: Sub) -> None:
         action="store_true",
         help="list the robot's exported procedures, their signatures and what they do",
     )
+    p.add_argument(
+        "--all",
+        action="store_true",
+        help="with --list: also mover's own protocol procedures (mover.*)",
+    )
     p.add_argument("--kwargs", metavar="JSON", help="keyword arguments as a JSON object")
     p.add_argument("--timeout", type=positive, default=10.0, help="seconds (default 10)")
     _team_options(p)
@@ -242,6 +247,8 @@ def run_call(args: argparse.Namespace) -> int:
         if args.procedure is not None or args.args or args.kwargs:
             raise UsageError("--list takes no procedure and no arguments")
         args.procedure = "mover.procedures"
+    elif args.all:
+        raise UsageError("--all goes with --list")
     elif args.procedure is None:
         raise UsageError("name a procedure to call (or --list the robot's procedures)")
     try:
@@ -285,10 +292,13 @@ async def _call(
             print(f"mover call: {type(exc).__name__}: {exc}", file=sys.stderr)
             return 1
     if args.list and isinstance(result, dict):
-        for name in sorted(result):
+        hidden = [n for n in result if n.startswith("mover.")] if not args.all else []
+        for name in sorted(set(result) - set(hidden)):
             entry = result[name] if isinstance(result[name], dict) else {}
             doc = f"  {entry['doc']}" if entry.get("doc") else ""
             print(f"{name}{entry.get('signature', '(?)')}{doc}")
+        if hidden:
+            print(f"({len(hidden)} of mover's own procedures (mover.*) not shown: --all)")
         return 0
     print(json.dumps(result, default=_plain))
     return 0
@@ -397,12 +407,33 @@ async def _echo(team: TeamCredentials, config: NodeConfig, args: argparse.Namesp
         seen = 0
         async with node.subscribe(args.topic, maxlen=ECHO_QUEUE) as messages:
             print(f"mover echo: listening on {args.topic!r} in team {team.name!r}", file=sys.stderr)
-            async for msg in messages:
-                seen += 1
-                print(_echoed(msg, args.json), flush=True)
-                if args.count and seen >= args.count:
-                    break
+            quiet = asyncio.get_running_loop().call_later(
+                ECHO_QUIET, _say_quiet, args.topic, where is None
+            )
+            try:
+                async for msg in messages:
+                    seen += 1
+                    quiet.cancel()
+                    print(_echoed(msg, args.json), flush=True)
+                    if args.count and seen >= args.count:
+                        break
+            finally:
+                quiet.cancel()
     return 0
+
+
+ECHO_QUIET = 5.0
+"""Seconds of silence after which ``mover echo`` says what it is waiting for, once."""
+
+
+def _say_quiet(topic: str, nowhere: bool) -> None:
+    hint = "; range-limited broadcasts reach it only --at a place within their range"
+    hint = hint if nowhere else ""
+    print(
+        f"mover echo: nothing on {topic!r} for {ECHO_QUIET:g} s; still listening (a lock-step"
+        f" world sends only while its robots tick{hint})",
+        file=sys.stderr,
+    )
 
 
 class _Fixed:

@@ -61,8 +61,14 @@ async def test_call_list_shows_procedures_signatures_and_docstrings() -> None:
         assert code == 0, err
         lines = out.splitlines()
         assert "add(a: int, b: int = 2) -> int  Add two numbers." in lines
-        assert "mover.procedures() -> dict[str, dict[str, str]]  What this node exports" in out
+        assert not any(line.startswith("mover.") for line in lines)  # the protocol's: --all
+        assert "of mover's own procedures (mover.*) not shown: --all" in out
         assert not any("More that" in line for line in lines)
+        code, out, err = await _mover(c, "call", "launcher", "--list", "--all", "--wait", "10")
+        assert code == 0, err
+        assert "mover.procedures() -> dict[str, dict[str, str]]  What this node exports" in out
+        code, _, err = await _mover(c, "call", "launcher", "add", "--all")
+        assert code == 2 and "--all goes with --list" in err
         code, _, err = await _mover(c, "call", "launcher", "add", "--list")
         assert code == 2 and "--list takes no procedure" in err and "Traceback" not in err
         code, _, err = await _mover(c, "call", "launcher")
@@ -91,3 +97,22 @@ async def test_echo_prints_decoded_messages_with_distance_from_its_place() -> No
         assert code == 2 and "not a topic" in err
         code, _, err = await _mover(c, "echo", "hello", "--at", "1,nan")
         assert code == 2 and "--at" in err
+
+
+async def test_echo_says_what_it_waits_for_when_nothing_comes() -> None:
+    async with cluster() as c, c.launcher():
+        proc = await asyncio.create_subprocess_exec(
+            sys.executable, "-m", "mover", "echo", "quiet/topic", env=_env(c), cwd=ROOT,
+            stdout=asyncio.subprocess.DEVNULL, stderr=asyncio.subprocess.PIPE,
+        )  # fmt: skip
+        said: list[str] = []
+        try:
+            async with asyncio.timeout(20):
+                while not any("nothing on" in line for line in said):
+                    said.append((await proc.stderr.readline()).decode())  # type: ignore[union-attr]
+        finally:
+            proc.kill()
+            await proc.wait()
+    told = "".join(said)
+    assert "nothing on 'quiet/topic' for 5 s; still listening" in told
+    assert "--at a place within their range" in told
