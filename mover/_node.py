@@ -35,6 +35,8 @@ log = logging.getLogger("mover.node")
 REACH_RETRY = (0.2, 5.0)
 """Seconds between tries to reach the router or peers at start: the first, and the most (it
 doubles from one to the next)."""
+REACH_SAY = 5.0
+"""Seconds between the lines a node says while it cannot reach its router or peers."""
 
 
 class _Declared(Protocol):
@@ -70,8 +72,10 @@ class Node:
         on_refused: Literal["reply", "ignore"] = "reply",
         observer: bool = False,
         unique: bool = False,
+        reach_hint: str = "",
     ) -> None:
         self.name = _keys.check_name("robot", name)
+        self.reach_hint = reach_hint  # what to check, said while the router does not answer
         self.team_config = team
         self.kind = kind
         self.config = config or NodeConfig()
@@ -154,7 +158,7 @@ class Node:
         loop = asyncio.get_running_loop()
         bound = self.config.patience if self.observer else None
         started = loop.time()
-        wait, said = REACH_RETRY[0], ""
+        wait, said, last = REACH_RETRY[0], "", 0.0
         while True:
             try:  # a new zenoh config each time: zenoh takes it
                 session: zenoh.Session = await run_blocking(
@@ -170,10 +174,15 @@ class Node:
                         f"cannot reach {where} within {bound:g} s (is the router up? "
                         "MOVER_CONNECT or the zenoh config names the endpoints)"
                     ) from None
-                if not said:
-                    said = where
+                waited = loop.time() - started
+                if not said or waited - last >= REACH_SAY:
+                    said, last = where, waited
                     until = "until it answers" if bound is None else f"for {bound:g} s"
-                    log.warning("%s: cannot reach %s: trying again %s", self.name, where, until)
+                    hint = f"; {self.reach_hint}" if self.reach_hint else ""
+                    log.warning(
+                        "%s: cannot reach %s (%.0f s): trying again %s%s",
+                        self.name, where, waited, until, hint,
+                    )  # fmt: skip
                 await asyncio.sleep(wait)
                 wait = min(wait * 2, REACH_RETRY[1])
                 continue

@@ -32,7 +32,7 @@ from types import TracebackType
 from typing import IO, Any, TypeVar
 
 from .._config import NodeConfig, TeamCredentials, free_port
-from .._exceptions import ConfigError
+from .._exceptions import ConfigError, MoverError
 from .._node import Node
 from .._procs import Child, ProcessExited, start, stop
 from .._programs import launch
@@ -48,8 +48,6 @@ KILL_GRACE = 2.0
 """Seconds after SIGTERM before SIGKILL."""
 ROUTER_READY = 10.0
 """Seconds a router has to say it listens."""
-SAY_EVERY = 5.0
-"""Seconds between two lines saying what ``mover up`` waits for across hosts."""
 
 
 class UpError(Exception):
@@ -188,31 +186,28 @@ class Supervisor:
                 asyncio.wait_for(router.said_ready.wait(), ROUTER_READY), "the router to listen"
             )
             rest = procs[1:]
-        self.node = Node(self.name, self.team, kind="tool", config=mine)
+        hint = ""
+        if self.host is not None:
+            home = _hosts.router_host(self.plan).name
+            hint = f"is `mover up {self.plan.source} --host {home}` running?"
+        self.node = Node(self.name, self.team, kind="tool", config=mine, reach_hint=hint)
         await self._join(endpoint)
         for p in rest:
             await self._spawn(p, env)
 
     async def _join(self, endpoint: str) -> None:
-        """Open this process's node. Across hosts the router may not be up yet: try again
-        every second, saying so every :data:`SAY_EVERY` seconds, up to the ready bound."""
-        t0 = time.monotonic()
-        said = -SAY_EVERY
-        while True:
-            try:
+        """Open this process's node. Across hosts the router may not be up yet: the node tries
+        again, saying every few seconds which `mover up` should be running, up to the ready
+        bound."""
+        try:
+            async with asyncio.timeout(self.ready_bound() if self.host is not None else None):
                 await self.node.open()
-                return
-            except Exception as exc:  # a port taken, an endpoint refused: zenoh's words
-                waited = time.monotonic() - t0
-                if self.host is None or waited > self.ready_bound():
-                    raise UpError(f"cannot join the team on {endpoint}: {exc}") from None
-                if waited - said >= SAY_EVERY:
-                    said = waited
-                    home = _hosts.router_host(self.plan).name
-                    home = f"mover up {self.plan.source} --host {home}"
-                    self.say(f"the router at {endpoint} does not answer yet; "
-                             f"is `{home}` running? trying again")  # fmt: skip
-                await self.guard(asyncio.sleep(1.0))
+        except TimeoutError:
+            raise UpError(
+                f"cannot join the team on {endpoint}: no answer in {self.ready_bound():g} s"
+            ) from None
+        except MoverError as exc:  # a port taken, an endpoint refused: zenoh's words
+            raise UpError(f"cannot join the team on {endpoint}: {exc}") from None
 
     def ready_bound(self) -> float:
         """Seconds the team has to come up: the file's ``ready_timeout``, else 30 s and 2 s a

@@ -61,7 +61,7 @@ ROBOTS_MESSAGES = {
 #: The private modules of mover that the packages above it may use (docs/architecture.md says
 #: why): the table reader, a finished task's error, and ``mover up``'s plan for ``mover demo``.
 MOVER_INTERNALS = {
-    "robots": {"mover._futures"},
+    "robots": {"mover._futures", "mover._endpoints"},
     "sim_hw": {"mover._tables", "mover._keylines", "mover._futures"},
     "programs": set(),
     "experiments": {"mover._up"},

@@ -123,7 +123,7 @@ async def test_one_team_file_two_hosts_and_a_run_from_a_third(tmp_path: Path) ->
                 await asyncio.wait_for(u.pump, 10)
         for host, u in ups.items():
             print(f"--- mover up --host {host}\n" + "\n".join(u.lines))
-        waited = [x for x in ups["b"].lines if "does not answer yet" in x]
+        waited = [x for x in ups["b"].lines if "cannot reach" in x]
         assert waited and "--host a" in waited[0]
         for u in ups.values():
             assert u.child.proc.returncode == 0
