@@ -35,21 +35,16 @@ def scheduler(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
     port = free_port()
     address = f"127.0.0.1:{port}"
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    worker = [str(DASK), "worker", f"tcp://{address}", "--host", "127.0.0.1", "--nthreads", "1"]
     commands = [
         [str(DASK), "scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard"],
-        *[
-            [str(DASK), "worker", f"tcp://{address}", "--host", "127.0.0.1", "--nthreads", "1"]
-            + ["--nworkers", "1", "--no-dashboard", "--name", f"w{i}"]
-            for i in range(2)
-        ],
+        *[[*worker, "--nworkers", "1", "--no-dashboard", "--name", f"w{i}"] for i in range(2)],
     ]
     procs: list[subprocess.Popen[bytes]] = []
     try:
         for i, command in enumerate(commands):
             with (logs / f"{i}.log").open("wb") as log:
-                procs.append(
-                    subprocess.Popen(command, cwd=ROOT, env=env, stdout=log, stderr=log)
-                )
+                procs.append(subprocess.Popen(command, cwd=ROOT, env=env, stdout=log, stderr=log))
         with distributed.Client(f"tcp://{address}", timeout=30) as client:
             client.wait_for_workers(2, timeout=30)
         yield address
