@@ -35,8 +35,9 @@ def default_save(runner: str) -> Path:
 
 
 def add_saved_arguments(parser: argparse.ArgumentParser, runner: str) -> None:
-    """``--save DIR``, ``--no-save``, ``--json`` and ``--quiet``: the options of a runner whose
-    runs are saved per point (its ``--workers`` comes with ``--runs``, from ``_common``)."""
+    """``--save DIR``, ``--no-save``, ``--json``, ``--quiet`` and ``--executor``: the options
+    of a runner whose runs are saved per point (its ``--workers`` comes with ``--runs``, from
+    ``_common``)."""
     where = default_save(runner)
     parser.add_argument(
         "--save",
@@ -48,6 +49,7 @@ def add_saved_arguments(parser: argparse.ArgumentParser, runner: str) -> None:
     parser.add_argument("--no-save", action="store_true", help="keep no per-point files")
     parser.add_argument("--json", action="store_true", help="end with one JSON line of every run")
     parser.add_argument("--quiet", action="store_true", help="no progress line")
+    add_executor_argument(parser)
 
 
 def load_runs(path: Path | None, seed: int) -> dict[int, Record]:
