@@ -152,7 +152,7 @@ def run_pool(
     """Make ``jobs`` with ``work`` on ``workers`` forked processes (one: in this one), or on
     the Dask cluster ``on`` names; append each record to the file ``save_to(record)`` as it
     comes, this process being the only writer (None: keep nothing). Returns the records made.
-    A job that raises on Dask stops the sweep: :class:`JobFailed` names it (``describe``)."""
+    A job that raises stops the sweep: :class:`JobFailed` names it (``describe``)."""
     fresh: list[Record] = []
     on = on or Executor()
     made = _local if on.kind == "local" else _dask
@@ -175,12 +175,39 @@ def _local(
     address: str | None,
     describe: Callable[[Job], str],
 ) -> Iterator[Record]:
+    guarded = _Guarded(work)
     if workers <= 1:  # in this process: no fork for a single worker
-        yield from map(work, jobs)
+        made: Iterator[tuple[int, Record | str]] = map(guarded, enumerate(jobs))
+        yield from _or_fail(made, jobs, describe)
         return
     ctx = multiprocessing.get_context("fork")
     with ctx.Pool(max(1, workers), initializer=_worker) as pool:
-        yield from pool.imap_unordered(work, jobs, chunksize=1)
+        made = pool.imap_unordered(guarded, enumerate(jobs), chunksize=1)
+        yield from _or_fail(made, jobs, describe)
+
+
+class _Guarded:
+    """``work`` made to return ``(index, record)``, or ``(index, what it raised)`` as text, so
+    that the runner can name the job that failed (a pool says only what was raised)."""
+
+    def __init__(self, work: Callable[[Any], Record]) -> None:
+        self.work = work
+
+    def __call__(self, indexed: tuple[int, Any]) -> tuple[int, Record | str]:
+        index, job = indexed
+        try:
+            return index, self.work(job)
+        except Exception as exc:
+            return index, f"{type(exc).__name__}: {exc}"
+
+
+def _or_fail(
+    made: Iterator[tuple[int, Record | str]], jobs: Sequence[Job], describe: Callable[[Job], str]
+) -> Iterator[Record]:
+    for index, rec in made:
+        if isinstance(rec, str):
+            raise JobFailed(f"{describe(jobs[index])} raised {rec}")
+        yield rec
 
 
 CONNECT_S = 30.0

@@ -98,7 +98,9 @@ def explode(job: int) -> dict[str, int]:
     return {"run": job, "seed": 7}
 
 
-def test_a_run_that_raises_is_named_in_one_line(scheduler: str) -> None:
+@pytest.mark.parametrize("where", ["local", "dask"])
+def test_a_run_that_raises_is_named_in_one_line(scheduler: str, where: str) -> None:
+    on = executor(f"dask://{scheduler}" if where == "dask" else "local")
     with pytest.raises(JobFailed, match=r"^run 3 of seed 7 raised ValueError: no maze today$"):
         run_pool(
             list(range(6)),
@@ -107,7 +109,7 @@ def test_a_run_that_raises_is_named_in_one_line(scheduler: str) -> None:
             save_to=None,
             bar=Progress(6, enabled=False),
             status=str,
-            on=executor(f"dask://{scheduler}"),
+            on=on,
             describe=lambda job: f"run {job} of seed 7",
         )
 
