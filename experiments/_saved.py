@@ -12,9 +12,13 @@ import json
 import logging
 import multiprocessing
 import signal
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import ExitStack
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TypeVar
+
+from mover.cli import UsageError
 
 from ._common import Progress
 
@@ -31,8 +35,9 @@ def default_save(runner: str) -> Path:
 
 
 def add_saved_arguments(parser: argparse.ArgumentParser, runner: str) -> None:
-    """``--save DIR``, ``--no-save``, ``--json`` and ``--quiet``: the options of a runner whose
-    runs are saved per point (its ``--workers`` comes with ``--runs``, from ``_common``)."""
+    """``--save DIR``, ``--no-save``, ``--json``, ``--quiet`` and ``--executor``: the options
+    of a runner whose runs are saved per point (its ``--workers`` comes with ``--runs``, from
+    ``_common``)."""
     where = default_save(runner)
     parser.add_argument(
         "--save",
@@ -44,6 +49,7 @@ def add_saved_arguments(parser: argparse.ArgumentParser, runner: str) -> None:
     parser.add_argument("--no-save", action="store_true", help="keep no per-point files")
     parser.add_argument("--json", action="store_true", help="end with one JSON line of every run")
     parser.add_argument("--quiet", action="store_true", help="no progress line")
+    add_executor_argument(parser)
 
 
 def load_runs(path: Path | None, seed: int) -> dict[int, Record]:
@@ -92,6 +98,46 @@ def seeds_table(folder: Path) -> str:
     return "\n".join(lines)
 
 
+EXECUTOR_HELP = (
+    "where the runs are made: local (this machine's worker processes), dask (a Dask cluster "
+    "of --workers processes started on 127.0.0.1) or dask://HOST:PORT (the Dask scheduler "
+    "there; needs the dask extra)"
+)
+
+
+class JobFailed(UsageError):
+    """A run raised: printed as one line naming the run and its seed, as a usage error is."""
+
+
+@dataclass(frozen=True)
+class Executor:
+    """Where :func:`run_pool` makes the runs: ``local`` (a fork pool), or ``dask`` at
+    ``address`` (None: a ``LocalCluster`` on 127.0.0.1)."""
+
+    kind: str = "local"
+    address: str | None = None
+
+
+def executor(text: str) -> Executor:
+    """``--executor local|dask[://ADDRESS]`` read (argparse type): ``dask://HOST:PORT`` is
+    the scheduler at ``tcp://HOST:PORT``; ``dask://tls://HOST:PORT`` keeps its scheme."""
+    if text == "local":
+        return Executor()
+    if text == "dask":
+        return Executor("dask")
+    if text.startswith("dask://") and len(text) > len("dask://"):
+        rest = text[len("dask://") :]
+        return Executor("dask", rest if "://" in rest else f"tcp://{rest}")
+    raise argparse.ArgumentTypeError(f"expected local, dask or dask://HOST:PORT, got {text!r}")
+
+
+def add_executor_argument(parser: argparse.ArgumentParser) -> None:
+    """``--executor local|dask[://ADDRESS]`` (default local)."""
+    parser.add_argument(
+        "--executor", type=executor, default=Executor(), metavar="WHERE", help=EXECUTOR_HELP
+    )
+
+
 def run_pool(
     jobs: Sequence[Job],
     work: Callable[[Job], Record],
@@ -100,22 +146,116 @@ def run_pool(
     save_to: Callable[[Record], Path] | None,
     bar: Progress,
     status: Callable[[Record], str],
+    on: Executor | None = None,
+    describe: Callable[[Job], str] = str,
 ) -> list[Record]:
-    """Make ``jobs`` with ``work`` on ``workers`` forked processes; append each record to the
-    file ``save_to(record)`` as it comes (None: keep nothing). Returns the records made."""
+    """Make ``jobs`` with ``work`` on ``workers`` forked processes (one: in this one), or on
+    the Dask cluster ``on`` names; append each record to the file ``save_to(record)`` as it
+    comes, this process being the only writer (None: keep nothing). Returns the records made.
+    A job that raises stops the sweep: :class:`JobFailed` names it (``describe``)."""
     fresh: list[Record] = []
-    ctx = multiprocessing.get_context("fork")
-    with ctx.Pool(max(1, workers), initializer=_worker) as pool:
-        for rec in pool.imap_unordered(work, jobs, chunksize=1):
-            fresh.append(rec)
-            if save_to is not None:
-                path = save_to(rec)
-                path.parent.mkdir(parents=True, exist_ok=True)
-                with path.open("a") as f:
-                    f.write(json.dumps(rec) + "\n")
-            bar.update(len(fresh), status(rec))
+    on = on or Executor()
+    made = _local if on.kind == "local" else _dask
+    for rec in made(jobs, work, workers, on.address, describe):
+        fresh.append(rec)
+        if save_to is not None:
+            path = save_to(rec)
+            path.parent.mkdir(parents=True, exist_ok=True)
+            with path.open("a") as f:
+                f.write(json.dumps(rec) + "\n")
+        bar.update(len(fresh), status(rec))
     bar.close(len(fresh))
     return fresh
+
+
+def _local(
+    jobs: Sequence[Job],
+    work: Callable[[Job], Record],
+    workers: int,
+    address: str | None,
+    describe: Callable[[Job], str],
+) -> Iterator[Record]:
+    guarded = _Guarded(work)
+    if workers <= 1:  # in this process: no fork for a single worker
+        made: Iterator[tuple[int, Record | str]] = map(guarded, enumerate(jobs))
+        yield from _or_fail(made, jobs, describe)
+        return
+    ctx = multiprocessing.get_context("fork")
+    with ctx.Pool(max(1, workers), initializer=_worker) as pool:
+        made = pool.imap_unordered(guarded, enumerate(jobs), chunksize=1)
+        yield from _or_fail(made, jobs, describe)
+
+
+class _Guarded:
+    """``work`` made to return ``(index, record)``, or ``(index, what it raised)`` as text, so
+    that the runner can name the job that failed (a pool says only what was raised)."""
+
+    def __init__(self, work: Callable[[Any], Record]) -> None:
+        self.work = work
+
+    def __call__(self, indexed: tuple[int, Any]) -> tuple[int, Record | str]:
+        index, job = indexed
+        try:
+            return index, self.work(job)
+        except Exception as exc:
+            return index, f"{type(exc).__name__}: {exc}"
+
+
+def _or_fail(
+    made: Iterator[tuple[int, Record | str]], jobs: Sequence[Job], describe: Callable[[Job], str]
+) -> Iterator[Record]:
+    for index, rec in made:
+        if isinstance(rec, str):
+            raise JobFailed(f"{describe(jobs[index])} raised {rec}")
+        yield rec
+
+
+CONNECT_S = 30.0
+"""The longest wait for a Dask scheduler to answer."""
+
+
+def _dask(
+    jobs: Sequence[Job],
+    work: Callable[[Job], Record],
+    workers: int,
+    address: str | None,
+    describe: Callable[[Job], str],
+) -> Iterator[Record]:
+    """The records of ``jobs`` as the cluster finishes them. A worker that dies is replaced
+    and its jobs rerun by the scheduler (Dask's ``allowed-failures``); a job that raises is
+    not retried: the others are cancelled and :class:`JobFailed` names it."""
+    try:
+        import distributed as dask  # the dask extra, imported only when asked for
+    except ImportError:
+        raise UsageError(
+            "--executor dask needs the dask extra: pip install 'mover[dask]'"
+        ) from None
+    with ExitStack() as stack:
+        if address is None:
+            cluster = dask.LocalCluster(
+                n_workers=max(1, workers),
+                threads_per_worker=1,
+                processes=True,
+                host="127.0.0.1",
+                dashboard_address=None,
+            )
+            stack.enter_context(cluster)
+            client = stack.enter_context(dask.Client(cluster, timeout=CONNECT_S))
+        else:
+            try:
+                client = stack.enter_context(dask.Client(address, timeout=CONNECT_S))
+            except OSError as exc:
+                raise UsageError(f"--executor: no Dask scheduler at {address}: {exc}") from None
+        futures = {client.submit(work, job, pure=False): job for job in jobs}
+        for future in dask.as_completed(list(futures)):
+            job = futures.pop(future)
+            try:
+                rec = future.result()
+            except Exception as exc:
+                client.cancel(list(futures))
+                raise JobFailed(f"{describe(job)} raised {type(exc).__name__}: {exc}") from None
+            future.release()
+            yield rec
 
 
 def _worker() -> None:

@@ -69,6 +69,7 @@ def settings(args: argparse.Namespace) -> EyebotSettings:
         figures=tuple(args.figure),
         duration=args.duration,
         workers=given.workers,
+        executor=args.executor,
         save=save,
         progress=not args.quiet,
         saved_only=args.saved,

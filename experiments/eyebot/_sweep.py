@@ -10,13 +10,13 @@ from __future__ import annotations
 
 import functools
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
 from .._common import Progress
-from .._saved import Record, load_runs, run_pool
+from .._saved import Executor, Record, load_runs, run_pool
 from ._arena import Arena, cluttered, corridors
 from ._trial import Settings, run
 
@@ -56,6 +56,7 @@ class EyebotSettings:
     figures: tuple[str, ...] = ("fig2",)
     duration: float = 3000.0
     workers: int = 2
+    executor: Executor = field(default_factory=Executor)
     save: Path | None = None
     progress: bool = True
     saved_only: bool = False  # report the saved runs, make none
@@ -138,6 +139,8 @@ def run_points(
         save_to=None if save is None else (lambda rec: save / f"{rec['point']}.jsonl"),
         bar=Progress(len(jobs), label, enabled=s.progress and bool(jobs)),
         status=lambda rec: f"{rec['point']} run {rec['run']}",
+        on=s.executor,
+        describe=lambda job: f"{job[1].name} run {job[2]} (--seed {job[0].seed})",
     )
     records.extend(fresh)
     return records, fresh, time.monotonic() - t0

@@ -129,6 +129,7 @@ def settings(args: argparse.Namespace) -> LevySettings:
         robots=tuple(args.robots),
         alphas=tuple(args.alphas),
         workers=given.workers,
+        executor=args.executor,
         setup=setup,
         save=save,
         out=None if args.no_plots else args.out,

@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from .._saved import Executor
 from ._paper import Setup
 
 
@@ -41,6 +42,7 @@ class LevySettings:
     robots: tuple[int, ...]
     alphas: tuple[float, ...]
     workers: int = 2
+    executor: Executor = field(default_factory=Executor)
     setup: Setup = field(default_factory=Setup)
     save: Path | None = None
     out: Path | None = None

@@ -76,6 +76,8 @@ def run_points(
         save_to=None if save is None else save_to,
         bar=Progress(len(jobs), label, enabled=s.progress and bool(jobs)),
         status=lambda rec: f"{rec['method']} n={rec['robots']} t={rec['targets']}",
+        on=s.executor,
+        describe=lambda job: f"{job[1].name} run {job[2]} (--seed {job[0].seed})",
     )
     records.extend(fresh)
     return records, fresh, time.monotonic() - t0

@@ -19,6 +19,7 @@ from .._common import (
     runner_parser,
 )
 from .._figures import add_figure_arguments
+from .._saved import add_executor_argument
 from ._paper import AGENT_COUNTS, PROBABILITIES, SIZE
 from ._report import composite, composite_text, tables
 from ._settings import MazeSettings
@@ -31,7 +32,14 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 
     help = "CU-LVP and baselines on seeded mazes (Linardakis et al., IV-V)"
     parser = runner_parser(sub, "maze", help, doc)
-    add_run_arguments(parser, runs=100, seed=None)
+    add_run_arguments(parser, runs=100, seed=None, workers=1)
+    add_executor_argument(parser)
+    parser.add_argument(
+        "--save",
+        type=Path,
+        default=None,
+        help="per-point JSON-lines directory, read back and added to (default: keep nothing)",
+    )
     parser.add_argument(
         "--hedac-runs",
         type=int,
@@ -117,6 +125,9 @@ def settings(args: argparse.Namespace) -> MazeSettings:
         format=args.format,
         load=tuple(args.load),
         json=args.json,
+        save=args.save,
+        workers=given.workers,
+        executor=args.executor,
     )
 
 

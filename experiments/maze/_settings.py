@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from robots.explore import EXCHANGES
 from sim_hw.grid import Maze
+
+from .._saved import Executor
 
 
 @dataclass(frozen=True)
@@ -15,7 +17,9 @@ class MazeSettings:
 
     ``maze``: run on this maze (read from ``maze_path``) instead of generated ones; ``out``:
     the directory for the figures (None: none); ``load``: tabulate these saved runs instead of
-    running; ``json``: end with a JSON line of every run.
+    running; ``json``: end with a JSON line of every run; ``save``: the per-point JSON-lines
+    directory read back and added to (None: keep nothing); ``workers`` and ``executor``: where
+    the runs are made (:func:`experiments._saved.run_pool`).
     """
 
     seed: int
@@ -32,6 +36,9 @@ class MazeSettings:
     format: str = "png"
     load: tuple[Path, ...] = ()
     json: bool = False
+    save: Path | None = None
+    workers: int = 1
+    executor: Executor = field(default_factory=Executor)
 
     def runs_for(self, method: str) -> int:
         """Runs of ``method`` per cell (HEDAC, the slow method, may have fewer)."""

@@ -19,6 +19,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import msgpack
@@ -39,6 +40,7 @@ from robots.grid_hal import direction_of
 from sim_hw.grid import Maze, broadcast_range, generate_maze, maze_world, observable, star_view
 
 from .._common import Progress
+from .._saved import Record, load_runs, run_pool
 from ._settings import MazeSettings
 
 
@@ -172,37 +174,86 @@ def _seq(*key: int) -> np.random.SeedSequence:
     return np.random.SeedSequence([int(k) for k in key])
 
 
-def trials(settings: MazeSettings) -> list[dict[str, Any]]:
-    """Run the requested grid of trials with a progress bar; one record per run.
+Job = tuple[MazeSettings, float, int, int, str]
+"""One run: the settings, the obstacle probability (NaN: the given maze), the run index, the
+agent count and the method."""
 
-    The maze of run k at probability p is the same for every agent count and method; the
-    agents' seed adds the agent count and the method.
-    """
+
+def jobs(s: MazeSettings) -> list[Job]:
+    """Every run of the grid, in the order its records are reported."""
+    ps = [math.nan] if s.maze is not None else list(s.p)
+    return [
+        (s, p, run, n, m)
+        for p in ps
+        for run in range(s.runs)
+        for n in s.agents
+        for m in s.methods
+        if run < s.runs_for(m)
+    ]
+
+
+def one_run(job: Job) -> dict[str, Any]:
+    """The record of one run. The maze of run k at probability p is the same for every agent
+    count and method (its seed is the master seed, the size, p and k); the agents' seed adds
+    the agent count and the method."""
+    s, p, run, n, m = job
+    code = 0 if math.isnan(p) else round(p * 1000)
+    maze = s.maze
+    if maze is None:
+        rng = np.random.default_rng(_seq(s.seed, s.size, code, run))
+        maze = generate_maze(s.size, p, rng, n_starts=max(s.agents))
+    key = (s.seed, s.size, code, run, n, list(METHODS).index(m))
+    rec = run_trial(maze, n, m, _seq(*key), exchanges=s.exchanges)
+    rec.update(method=m, agents=n, p=_p(p), run=run, seed=s.seed)
+    return rec
+
+
+def point_file(s: MazeSettings, method: str, agents: int, p: float | None) -> Path:
+    """The file of one point's runs under ``s.save``: the method, agent count, maze (size and
+    p, or the maze file's name) and exchanges name it, so that other settings save apart."""
+    assert s.save is not None
+    where = f"file-{s.maze_path.stem}" if s.maze_path is not None else f"s{s.size}-p{p:g}"
+    return s.save / f"{method}-n{agents}-{where}-x{s.exchanges}.jsonl"
+
+
+def describe(job: Job) -> str:
+    """A run as a failure names it: enough to make it again."""
+    s, p, run, n, m = job
+    return f"{m} n={n} p={p:g} run {run} (--seed {s.seed} --size {s.size})"
+
+
+def trials(settings: MazeSettings) -> list[dict[str, Any]]:
+    """The requested grid of trials, one record per run in grid order: the runs saved under
+    ``settings.save`` with its seed read back, the missing ones made on its executor and
+    saved as they finish."""
     s = settings
-    plan: list[tuple[float, int, Maze | None]]
-    if s.maze is not None:
-        plan = [(math.nan, run, s.maze) for run in range(s.runs)]
-    else:
-        plan = [(p, run, None) for p in s.p for run in range(s.runs)]
-    total = sum(
-        len(s.agents) * sum(1 for m in s.methods if s.runs_for(m) > run) for _, run, _ in plan
+    todo = jobs(s)
+    have: dict[tuple[str, int, float | None], dict[int, Record]] = {}
+    if s.save is not None:
+        for _, p, _, n, m in todo:
+            if (m, n, _p(p)) not in have:
+                have[m, n, _p(p)] = load_runs(point_file(s, m, n, _p(p)), s.seed)
+    records = [
+        r for per in have.values() for r in per.values() if r["run"] < s.runs_for(r["method"])
+    ]
+    missing = [j for j in todo if j[2] not in have.get((j[4], j[3], _p(j[1])), {})]
+    records += run_pool(
+        missing,
+        one_run,
+        workers=s.workers,
+        save_to=None
+        if s.save is None
+        else lambda r: point_file(s, r["method"], r["agents"], r["p"]),
+        bar=Progress(len(missing)),
+        status=lambda r: f"{r['method']} n={r['agents']} p={r['p']} run {r['run']}",
+        on=s.executor,
+        describe=describe,
     )
-    records: list[dict[str, Any]] = []
-    bar = Progress(total)
-    for p, run, given in plan:
-        code = 0 if math.isnan(p) else round(p * 1000)
-        maze = given
-        if maze is None:
-            rng = np.random.default_rng(_seq(s.seed, s.size, code, run))
-            maze = generate_maze(s.size, p, rng, n_starts=max(s.agents))
-        for n in s.agents:
-            for m in s.methods:
-                if run >= s.runs_for(m):
-                    continue
-                key = (s.seed, s.size, code, run, n, list(METHODS).index(m))
-                rec = run_trial(maze, n, m, _seq(*key), exchanges=s.exchanges)
-                rec.update(method=m, agents=n, p=None if math.isnan(p) else p, run=run)
-                records.append(rec)
-                bar.update(len(records), f"{m} n={n} p={p:g} run {run}")
-    bar.close(len(records))
+    order = {(m, n, _p(p), run): i for i, (_, p, run, n, m) in enumerate(todo)}
+    records.sort(key=lambda r: order[r["method"], r["agents"], r["p"], r["run"]])
     return records
+
+
+def _p(p: float) -> float | None:
+    """A record's obstacle probability: None for the given maze's (NaN in a job)."""
+    return None if math.isnan(p) else p

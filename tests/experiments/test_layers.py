@@ -33,12 +33,13 @@ THIRD_PARTY = {
     "robots": {"numpy", "typing_extensions"},
     "sim_hw": {"pymunk", "numpy", "matplotlib", "rerun"},
     "programs": {"numpy"},
-    "experiments": {"numpy", "matplotlib", "msgpack"},
+    "experiments": {"numpy", "matplotlib", "msgpack", "distributed"},
 }
 ONLY_IN = {
     "pytest": "mover/pytest_plugin.py",  # the pytest11 plugin
     "pytest_asyncio": "mover/pytest_plugin.py",
     "rerun": "sim_hw/view/",  # the optional viewer
+    "distributed": "experiments/_saved.py",  # the optional Dask executor
 }
 
 #: What of ``robots`` a world may use: the hardware interfaces, the backend protocol, the
