@@ -62,6 +62,7 @@ __all__ = [
     "cpu_hogs",
     "descendants",
     "first_line",
+    "free_port",
     "netlab_unavailable",
     "serve_programs",
     "stutter",

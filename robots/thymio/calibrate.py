@@ -25,7 +25,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from mover._config import free_port
+from mover.testing import free_port
 
 from ._link import Address, AsebaLink
 from .playground import (

@@ -31,7 +31,7 @@ ALLOWED = {
 THIRD_PARTY = {
     "mover": {"zenoh", "msgpack", "numpy", "cryptography", "pytest", "pytest_asyncio"},
     "robots": {"numpy", "typing_extensions"},
-    "sim_hw": {"pymunk", "numpy", "matplotlib", "rerun"},
+    "sim_hw": {"pymunk", "numpy", "matplotlib", "rerun", "mcap", "mcap_ros2"},
     "programs": {"numpy"},
     "experiments": {"numpy", "matplotlib", "msgpack", "distributed"},
 }
@@ -39,6 +39,8 @@ ONLY_IN = {
     "pytest": "mover/pytest_plugin.py",  # the pytest11 plugin
     "pytest_asyncio": "mover/pytest_plugin.py",
     "rerun": "sim_hw/view/",  # the optional viewer
+    "mcap": "sim_hw/continuous/_mcap.py",  # the optional MCAP recording (the `mcap` extra)
+    "mcap_ros2": "sim_hw/continuous/_mcap.py",
     "distributed": "experiments/_saved.py",  # the optional Dask executor
 }
 
@@ -62,7 +64,7 @@ ROBOTS_MESSAGES = {
 #: The private modules of mover that the packages above it may use (docs/architecture.md says
 #: why): the table reader, a finished task's error, and ``mover up``'s plan for ``mover demo``.
 MOVER_INTERNALS = {
-    "robots": {"mover._futures", "mover._endpoints"},
+    "robots": {"mover._futures", "mover._endpoints", "mover._orphans"},
     "sim_hw": {"mover._tables", "mover._keylines", "mover._futures"},
     "programs": set(),
     "experiments": {"mover._up"},
