@@ -65,7 +65,7 @@ ROBOTS_MESSAGES = {
 #: why): the table reader, a finished task's error, and ``mover up``'s plan for ``mover demo``.
 MOVER_INTERNALS = {
     "robots": {"mover._futures", "mover._endpoints", "mover._orphans"},
-    "sim_hw": {"mover._tables", "mover._keylines", "mover._futures"},
+    "sim_hw": {"mover._tables", "mover._keylines", "mover._futures", "mover._endpoints"},
     "programs": set(),
     "experiments": {"mover._up"},
 }
