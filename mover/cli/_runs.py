@@ -223,6 +223,14 @@ async def _run(
                 watch = _watch(node, members)
                 try:
                     ends = await outcomes(node, run, members)
+                except asyncio.CancelledError:  # Ctrl-C, SIGTERM: the run is the members'
+                    print(
+                        f"mover run: stopped watching; run {run} goes on on the members: "
+                        f"`mover run --attach {run}` follows it, `mover cancel {run}` ends it",
+                        file=sys.stderr,
+                        flush=True,
+                    )
+                    raise
                 finally:
                     watch.cancel()
         except CallError as exc:

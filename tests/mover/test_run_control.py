@@ -8,6 +8,7 @@ from __future__ import annotations
 import asyncio
 import os
 import random
+import signal
 import sys
 import time
 from pathlib import Path
@@ -186,6 +187,35 @@ async def test_the_cli_sees_attaches_to_and_cancels_a_run(tmp_path: Path) -> Non
 
         code, out, err = await mover(c, tmp_path, "run", "--attach", "later", "pause")
         assert code == 2 and "not both" in err
+
+
+async def test_ctrl_c_on_mover_run_says_the_run_goes_on_and_how_to_reach_it(
+    tmp_path: Path,
+) -> None:
+    async with cluster() as c, c.launcher() as node:
+        await start_members(c, node, ["a", "b"])
+        env = {**os.environ, **c.env, **c.team.env(), **c.peer.env()}
+        env["MOVER_STATE_DIR"] = str(tmp_path / "state")
+        proc = await asyncio.create_subprocess_exec(
+            sys.executable, "-m", "mover", "run", "pause", "--args", '{"seconds": 30}',
+            "--run-id", "long", "--wait", "5", env=env, cwd=ROOT,
+            stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.PIPE,
+            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+        )  # fmt: skip
+        try:
+            await wait_phase(node, "b", "long", "pausing")
+            proc.send_signal(signal.SIGINT)
+            _, err = await asyncio.wait_for(proc.communicate(), 15)
+        finally:
+            if proc.returncode is None:
+                proc.kill()
+                await proc.wait()
+        assert proc.returncode == 130, err
+        said = err.decode()
+        assert "run long goes on on the members" in said and "Traceback" not in said
+        assert "mover run --attach long" in said and "mover cancel long" in said
+        code, _, err_ = await mover(c, tmp_path, "cancel", "long", "--wait", "1")
+        assert code == 0, err_
 
 
 async def test_mover_run_warns_when_the_team_changed(tmp_path: Path) -> None:
