@@ -8,9 +8,7 @@ world's snapshot, made in-process. And every public name has a docstring (docs/_
 
 from __future__ import annotations
 
-import importlib.util
 import re
-import types
 from collections.abc import Iterable
 from pathlib import Path
 
@@ -20,17 +18,10 @@ from mover import _tables
 from mover._up._teamfile import load_team
 from sim_hw.continuous import World, load_world
 from sim_hw.continuous._record import scene_header
+from tests.helpers.docs_hooks import docs_hooks
 
 ROOT = Path(__file__).resolve().parents[2]
 REFERENCE = ROOT / "docs" / "reference"
-
-
-def _hooks() -> types.ModuleType:
-    spec = importlib.util.spec_from_file_location("mover_docs_hooks", ROOT / "docs" / "_hooks.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 def _known_keys(monkeypatch: pytest.MonkeyPatch) -> set[str]:
@@ -58,7 +49,7 @@ def _missing(keys: Iterable[str], page: Path) -> list[str]:
 
 
 def test_every_public_name_has_a_docstring() -> None:
-    assert _hooks().undocumented() == []
+    assert docs_hooks().undocumented() == []
 
 
 def test_the_team_file_page_names_every_key(monkeypatch: pytest.MonkeyPatch) -> None:

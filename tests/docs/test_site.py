@@ -7,7 +7,6 @@ entry point does not load fails it, as `make docs` does.
 
 from __future__ import annotations
 
-import importlib.util
 import logging
 import sys
 import types
@@ -19,18 +18,12 @@ from mkdocs.commands.build import build
 from mkdocs.config import load_config
 from mkdocs.exceptions import Abort, PluginError
 
+from tests.helpers.docs_hooks import docs_hooks
+
 # griffe (mkdocstrings' reader of the sources) asks git where each package's repository is
 pytestmark = pytest.mark.processes
 
 ROOT = Path(__file__).resolve().parents[2]
-
-
-def _hooks() -> types.ModuleType:
-    spec = importlib.util.spec_from_file_location("mover_docs_hooks", ROOT / "docs" / "_hooks.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 def test_the_site_builds_in_strict_mode(tmp_path: Path) -> None:
@@ -65,7 +58,7 @@ def test_a_name_without_a_docstring_is_named(monkeypatch: pytest.MonkeyPatch) ->
     module.bare = bare  # type: ignore[attr-defined]
     module.__all__ = ["Documented", "bare"]  # type: ignore[attr-defined]
     monkeypatch.setitem(sys.modules, "fake_public", module)
-    assert _hooks().undocumented(["fake_public"]) == [
+    assert docs_hooks().undocumented(["fake_public"]) == [
         "fake_public.Documented.method",
         "fake_public.bare",
     ]
