@@ -50,7 +50,7 @@ def with_ports(text: str, ports: Mapping[str, int]) -> str:
 
     def one(m: re.Match[str]) -> str:
         tag = m.group(0)
-        name = dict(_ATTR.findall(tag)).get("name")
+        name = dict(_ATTR.findall(tag)).get("name", "")
         if name not in ports:
             return tag
         return re.sub(r'\bport="[^"]*"', f'port="{ports[name]}"', tag)

@@ -270,7 +270,9 @@ _PLAYGROUND = ("kind", "file", "name", "ports", "timeout", "required", "host")
 def _playground(t: Table, base: Path) -> WorldPlan:
     """An Aseba Playground world: not a member, not lock-step (:mod:`._playground`)."""
     t.only(_PLAYGROUND, kind="a playground world")
-    file = _path(base, t.read("file", Kind("the world file, relative to the team file", STRING.check)))
+    file = _path(
+        base, t.read("file", Kind("the world file, relative to the team file", STRING.check))
+    )
     try:
         robots = world_robots(file.read_text(errors="replace"))
     except OSError as exc:

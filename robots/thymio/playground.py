@@ -12,17 +12,17 @@ robots); it listens on every interface, as it has no option to bind one.
 
 from __future__ import annotations
 
+import argparse
 import asyncio
 import contextlib
 import os
+import re
 import shutil
 import signal
 import struct
+import sys
 import tempfile
 import zlib
-import argparse
-import re
-import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -248,9 +248,7 @@ def register(sub: Any) -> None:
         metavar="NAME=PORT",
         help="run robot NAME on PORT (a temporary copy of the file); repeatable",
     )
-    p.add_argument(
-        "--timeout", type=float, default=20.0, help="seconds for every robot to answer"
-    )
+    p.add_argument("--timeout", type=float, default=20.0, help="seconds for every robot to answer")
     p.set_defaults(func=_run)
 
 
