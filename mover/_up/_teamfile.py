@@ -264,7 +264,7 @@ def _world(t: Table, base: Path) -> WorldPlan:
     )
 
 
-_PLAYGROUND = ("kind", "file", "name", "ports", "timeout", "required", "host")
+_PLAYGROUND = ("kind", "file", "name", "ports", "timeout", "required")
 
 
 def _playground(t: Table, base: Path) -> WorldPlan:
@@ -286,7 +286,6 @@ def _playground(t: Table, base: Path) -> WorldPlan:
         lockstep=False,
         timeout=t.option("timeout", _WAIT),
         required=t.read("required", BOOLEAN, True),
-        host=t.option("host", NAME),
         robots=robots,
         ports=t.read("ports", string(PORT_CHOICES), "free"),
     )
