@@ -168,7 +168,7 @@ async def test_three_thymios_gather_as_processes_of_the_pytest_plugin(
     _check_gathered(outcomes)
 
 
-@pytest.mark.timeout(60)
+@pytest.mark.timeout(120)
 async def test_three_thymios_gather_from_mover_up_from_nothing(tmp_path: Path) -> None:
     """``mover up teams/thymio_gather.toml --exit-after-run`` as shipped: the team file starts
     the Playground on free ports, the robots and the program, and stops them all."""
@@ -179,7 +179,7 @@ async def test_three_thymios_gather_from_mover_up_from_nothing(tmp_path: Path) -
         stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.STDOUT,
     )  # fmt: skip
     try:
-        out, _ = await asyncio.wait_for(proc.communicate(), 50)
+        out, _ = await asyncio.wait_for(proc.communicate(), 100)  # 30 s typical: the search
     finally:
         if proc.returncode is None:
             proc.send_signal(signal.SIGINT)
