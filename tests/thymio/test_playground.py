@@ -200,9 +200,9 @@ async def test_three_thymios_gather_from_mover_up_from_nothing(tmp_path: Path) -
         outcomes[name] = {"result": json.loads(line.split(f"[gather] {name}: ", 1)[1])}
     _check_gathered(outcomes)
     assert "Traceback" not in text
-    for port in map(int, ports.values()):  # the Playground stopped with the team
+    for number in ports.values():  # the Playground stopped with the team
         with pytest.raises(ConnectionRefusedError):
-            await asyncio.open_connection("127.0.0.1", port)
+            await asyncio.open_connection("127.0.0.1", int(number))
 
 
 @pytest.mark.timeout(120)
