@@ -12,17 +12,21 @@ import hashlib
 import json
 import secrets
 import sys
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from . import _hosts
+from .._exceptions import ConfigError
+from . import _hosts, _playground
 from ._teamfile import MemberPlan, TeamPlan, WorldPlan
 
 PEER_MESH_MAX = 12
 """The largest team (members, ``mover up`` itself included) that runs as a peer mesh; a larger
 one gets a zenoh router, its members joining as clients. Measured: 50 idle peers burn 1.1
 CPU-s/s, behind a router 17x less; the crossing point is tuned by ``bench/team.py``."""
+
+PLAYGROUND_READY = 20.0
+"""Seconds an Aseba Playground has, by default, until every robot answers on its port."""
 
 
 def needs_router(members: int) -> bool:
@@ -75,8 +79,10 @@ class ProcessPlan:
 
 
 def members(plan: TeamPlan) -> int:
-    """How many nodes the team has: the world, every group's processes and ``mover up``."""
-    return len(plan.members) + (plan.world is not None) + 1
+    """How many nodes the team has: the world (an Aseba Playground is none), every group's
+    processes and ``mover up``."""
+    node = plan.world is not None and plan.world.kind != "playground"
+    return len(plan.members) + node + 1
 
 
 def uses_router(plan: TeamPlan) -> bool:
@@ -97,6 +103,8 @@ def processes(
     team across hosts: those of ``host``, each with the settings that reach the router)."""
     if plan.hosts:
         assert host is not None
+        if plan.world is not None and plan.world.kind == "playground":
+            raise ConfigError("a playground world runs on one machine: no [[hosts]] with it")
         return _on_host(plan, s, run_dir, host)
     found: list[ProcessPlan] = []
     if uses_router(plan):
@@ -110,11 +118,36 @@ def processes(
                 stage=0,
             )
         )
+    if plan.world is not None and plan.world.kind == "playground":
+        return found + playground_processes(plan)
     if plan.world is not None:
         argv = world_argv(plan.world, s, run_dir)
         found.append(ProcessPlan(plan.world.name, argv, plan.world.required, stage=1))
     found += [ProcessPlan(m.name, member_argv(m), m.required) for m in plan.members]
     return found
+
+
+def playground_processes(plan: TeamPlan) -> list[ProcessPlan]:
+    """An Aseba Playground and its Thymios: ``mover playground`` (no member: ready once it
+    prints :data:`._playground.READY`, every robot answering on its port), then each robot
+    with ``link`` to its port. ConfigError when ``asebaplayground`` is not installed."""
+    w = plan.world
+    assert w is not None and w.kind == "playground"
+    _playground.installed()
+    ports = _playground.ports_of(w.robots, w.ports)
+    args = ["playground", str(w.file)]
+    args += [f"--port={name}={port}" for name, port in ports.items() if port != w.robots[name]]
+    args += ["--timeout", f"{w.timeout or PLAYGROUND_READY:g}"]
+    world = ProcessPlan(
+        w.name, _cli(*args), w.required, member=False, ready_line=_playground.READY, stage=1
+    )
+    robots = [
+        replace(m, options={**m.options, "link": f"tcp:127.0.0.1:{ports[m.name]}"})
+        if m.name in ports and m.hardware == "thymio"
+        else m
+        for m in plan.members
+    ]
+    return [world] + [ProcessPlan(m.name, member_argv(m), m.required) for m in robots]
 
 
 def _on_host(plan: TeamPlan, s: Seeds, run_dir: Path, host: str) -> list[ProcessPlan]:

@@ -193,7 +193,20 @@ class Supervisor:
         self.node = Node(self.name, self.team, kind="tool", config=mine, reach_hint=hint)
         await self._join(endpoint)
         for p in rest:
-            await self._spawn(p, env)
+            child = await self._spawn(p, env)
+            if not p.member and p.ready_line:  # not a member: ready once it says so
+                await self._said_ready(child)
+
+    async def _said_ready(self, child: _Child) -> None:
+        """Wait, bounded, for a process that is no member (an Aseba Playground) to print its
+        ready line: the processes started after it need what it serves."""
+        bound = self.ready_bound()
+        what = f"{child.plan.ready_line!r} from {child.plan.name} within {bound:g} s"
+        try:
+            await self.guard(asyncio.wait_for(child.said_ready.wait(), bound))
+        except TimeoutError:
+            raise UpError(f"no {what} (see {self.out / child.plan.name}.log)") from None
+        child.ready = True
 
     async def _join(self, endpoint: str) -> None:
         """Open this process's node. Across hosts the router may not be up yet: the node tries

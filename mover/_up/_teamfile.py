@@ -39,6 +39,7 @@ from .._tables import (
     vector,
 )
 from ._hosts import HostPlan, placed, read_hosts
+from ._playground import PORT_CHOICES, world_robots
 
 MAX_FILE_BYTES = 2**20
 """The largest team file read."""
@@ -51,8 +52,8 @@ MAX_WAIT = 600.0
 SUPERVISOR = "up"
 """The member name of ``mover up`` itself (a file may not give it to a process)."""
 
-WORLD_KINDS = {"continuous": "world", "grid": "gridworld"}  # kind -> default node name
-HARDWARE_OF = {"continuous": "sim", "grid": "grid"}  # the backend that joins each kind
+WORLD_KINDS = {"continuous": "world", "grid": "gridworld", "playground": "playground"}
+HARDWARE_OF = {"continuous": "sim", "grid": "grid", "playground": "thymio"}  # kind -> backend
 TOPOLOGIES = ("auto", "peer", "router")
 
 
@@ -83,6 +84,8 @@ class WorldPlan:
     required: bool = True
     control_delay: int = 0  # lock-step: a command for tick t applies at t + K (sim_hw._delayed)
     host: str | None = None  # None: the one host (or, across hosts, the first)
+    robots: dict[str, int] = field(default_factory=dict)  # playground: name -> port in the file
+    ports: str = "free"  # playground: "free" (a temporary copy of the file) or "file"
 
 
 @dataclass(frozen=True)
@@ -229,6 +232,8 @@ _COMMON = ("kind", "file", "name", "timeout", "until", "expect", "seed", "requir
 
 def _world(t: Table, base: Path) -> WorldPlan:
     kind = t.read("kind", string(tuple(WORLD_KINDS)), "continuous")
+    if kind == "playground":
+        return _playground(t, base)
     t.only(_COMMON + (_CONTINUOUS if kind == "continuous" else _GRID), kind=f"a {kind} world")
     file = t.read("file", Kind("the world file, relative to the team file", STRING.check))
     speed = t.option("speed", number(high=1000.0))
@@ -258,6 +263,52 @@ def _world(t: Table, base: Path) -> WorldPlan:
         control_delay=t.read("control_delay", integer(low=0, high=100), 0),
         host=t.option("host", NAME),
     )
+
+
+_PLAYGROUND = ("kind", "file", "name", "ports", "timeout", "required")
+
+
+def _playground(t: Table, base: Path) -> WorldPlan:
+    """An Aseba Playground world: not a member, not lock-step (:mod:`._playground`)."""
+    t.only(_PLAYGROUND, kind="a playground world")
+    file = _path(
+        base, t.read("file", Kind("the world file, relative to the team file", STRING.check))
+    )
+    try:
+        robots = world_robots(file.read_text(errors="replace"))
+    except OSError as exc:
+        raise t.fail("file", f"cannot read {file}: {exc.strerror or exc}") from None
+    except ValueError as exc:
+        raise t.fail("file", f"{file}: {exc}") from None
+    return WorldPlan(
+        kind="playground",
+        file=file,
+        name=t.read("name", NAME, WORLD_KINDS["playground"]),
+        lockstep=False,
+        timeout=t.option("timeout", _WAIT),
+        required=t.read("required", BOOLEAN, True),
+        robots=robots,
+        ports=t.read("ports", string(PORT_CHOICES), "free"),
+    )
+
+
+def _on_playground(
+    g: Table, world: WorldPlan, names: list[str], hardware: str, options: dict[str, Any]
+) -> dict[str, Any]:
+    """A robot group beside a playground world: Thymios of the world file, whose ``link``
+    ``mover up`` gives (the group's options without it)."""
+    if hardware != "thymio":
+        raise g.fail("hardware", f"a playground world's robots are thymio, got {hardware!r}")
+    if "link" in options:
+        raise g.fail("options", "the playground world gives each robot its link: drop link")
+    for i, name in enumerate(names):
+        if name not in world.robots:
+            known = ", ".join(world.robots)
+            raise g.fail(
+                ("names", i) if g.has("names") else "prefix",
+                f"{name!r} is no robot of {world.file} ({known})",
+            )
+    return options
 
 
 _GROUP = ("names", "prefix", "count", "first", "kind", "required")
@@ -301,7 +352,9 @@ def _group(g: Table, world: WorldPlan | None, *, robot: bool) -> list[MemberPlan
     target = g.option("world", NAME) or (world.name if world is not None else None)
     if hardware == "none":
         target = None
-    if world is not None and target == world.name and hardware == "sim" and not poses:
+    if world is not None and world.kind == "playground":
+        target, options = None, _on_playground(g, world, names, hardware, options)
+    elif world is not None and target == world.name and hardware == "sim" and not poses:
         _in_world(g, names, world)
     return [
         MemberPlan(

@@ -12,20 +12,24 @@ robots); it listens on every interface, as it has no option to bind one.
 
 from __future__ import annotations
 
+import argparse
 import asyncio
 import contextlib
 import os
+import re
 import shutil
 import signal
 import struct
+import sys
 import tempfile
 import zlib
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import IO
+from typing import IO, Any
 
 from mover._orphans import guarded
+from mover._up._playground import READY, with_ports, world_robots
 from robots.hal import HardwareLost
 
 from ._link import Address, AsebaLink
@@ -34,11 +38,14 @@ __all__ = [
     "PLAYGROUND",
     "PlaygroundRobot",
     "ground_png",
+    "on_ports",
     "playground_command",
     "start_playground",
     "stop_playground",
     "world_xml",
 ]
+
+# (at the end: ``mover playground``, the world process of a team file's playground world)
 
 PLAYGROUND = "asebaplayground"
 """The simulator's command (Debian package ``aseba``)."""
@@ -162,6 +169,7 @@ async def start_playground(
         start_new_session=True,  # a Ctrl-C meant for the robots does not end the world
     )
     _STATE_DIRS[proc.pid] = state
+    port = None
     try:
         async with asyncio.timeout(timeout):
             for port in ports:
@@ -169,7 +177,7 @@ async def start_playground(
     except TimeoutError:
         await stop_playground(proc)
         raise RuntimeError(
-            f"{PLAYGROUND} {world}: no robot listened within {timeout:g} s"
+            f"{PLAYGROUND} {world}: no robot answered on port {port} within {timeout:g} s"
         ) from None
     except BaseException:
         await stop_playground(proc)
@@ -207,3 +215,76 @@ async def stop_playground(proc: asyncio.subprocess.Process, sig: int = signal.SI
     state = _STATE_DIRS.pop(proc.pid, None)
     if state is not None:
         shutil.rmtree(state, ignore_errors=True)
+
+
+def on_ports(world: Path, ports: Mapping[str, int], folder: Path) -> Path:
+    """A copy of ``world`` in ``folder`` with the robots of ``ports`` (by name) on those ports;
+    the ground texture it names is linked beside it."""
+    text = world.read_text()
+    texture = re.search(r'groundTexture="([^"]+)"', text)
+    if texture is not None and not Path(texture.group(1)).is_absolute():
+        link = folder / texture.group(1)
+        link.parent.mkdir(parents=True, exist_ok=True)
+        link.symlink_to((world.parent / texture.group(1)).resolve())
+    copy = folder / world.name
+    copy.write_text(with_ports(text, ports))
+    return copy
+
+
+def register(sub: Any) -> None:
+    """Add ``mover playground``: the world process of ``[world] kind = "playground"``."""
+    p = sub.add_parser(
+        "playground",
+        help="run Aseba Playground headless on a world file until Ctrl-C",
+        description="Start asebaplayground (Debian package aseba) headless on WORLD, print "
+        f"'{READY}: NAME=PORT ...' once every robot answers on its TCP port, and stop it on "
+        "Ctrl-C or SIGTERM. What mover up starts for a team file's playground world.",
+    )
+    p.add_argument("world", metavar="WORLD.playground", help="the world file")
+    p.add_argument(
+        "--port",
+        action="append",
+        default=[],
+        metavar="NAME=PORT",
+        help="run robot NAME on PORT (a temporary copy of the file); repeatable",
+    )
+    p.add_argument("--timeout", type=float, default=20.0, help="seconds for every robot to answer")
+    p.set_defaults(func=_run)
+
+
+def _run(args: argparse.Namespace) -> int:
+    from mover.cli import UsageError
+
+    world = Path(args.world)
+    try:
+        robots = world_robots(world.read_text(errors="replace"))
+    except OSError as exc:
+        raise UsageError(f"cannot read {world}: {exc.strerror or exc}") from None
+    except ValueError as exc:
+        raise UsageError(f"{world}: {exc}") from None
+    ports: dict[str, int] = {}
+    for item in args.port:
+        name, _, port = item.partition("=")
+        if name not in robots or not port.isdigit() or not 0 < int(port) < 65536:
+            raise UsageError(f"--port {item!r}: expected NAME=PORT, NAME a robot of {world}")
+        ports[name] = int(port)
+    try:
+        return asyncio.run(_serve(world, {**robots, **ports}, ports, args.timeout))
+    except (FileNotFoundError, RuntimeError) as exc:
+        print(f"mover playground: {exc}", file=sys.stderr)
+        return 1
+
+
+async def _serve(world: Path, robots: dict[str, int], moved: dict[str, int], timeout: float) -> int:
+    with tempfile.TemporaryDirectory(prefix="mover-world-") as folder:
+        file = on_ports(world, moved, Path(folder)) if moved else world
+        log = sys.stdout.buffer
+        proc = await start_playground(file, list(robots.values()), log=log, timeout=timeout)
+        try:
+            ready = " ".join(f"{name}={port}" for name, port in robots.items())
+            print(f"{READY}: {ready}", flush=True)
+            code = await proc.wait()
+            print(f"mover playground: {PLAYGROUND} exited with code {code}", file=sys.stderr)
+            return 1
+        finally:
+            await stop_playground(proc)

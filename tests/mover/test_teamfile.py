@@ -2,16 +2,20 @@
 
 from __future__ import annotations
 
+import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
 
+from mover._exceptions import ConfigError
 from mover._keylines import KeyLines
 from mover._up import needs_router
 from mover._up._plan import PEER_MESH_MAX, derive, members, processes, seeds, uses_router
-from mover._up._teamfile import MAX_PROCESSES, TeamFileError, load_team, parse_team
+from mover._up._playground import READY
+from mover._up._teamfile import MAX_PROCESSES, TeamFileError, TeamPlan, load_team, parse_team
 
 pytestmark = pytest.mark.processes
 
@@ -259,3 +263,146 @@ def test_check_prints_the_plan_and_starts_nothing(tmp_path: Path) -> None:
     assert "  scout: scout, hardware sim (required)" in lines
     assert "  desk: workstation, hardware none" in lines
     assert not list((ROOT / "runs").glob("alpha-*"))  # no run folder: nothing started
+
+
+# -- an Aseba Playground world -------------------------------------------------------------------
+
+PLAYGROUND_WORLD = """\
+<aseba-playground>
+  <world w="100" h="100"/>
+  <robot type="thymio2" x="20" y="20" port="33333" name="t1" nodeId="1"/>
+  <robot type="thymio2" x="20" y="60" port="33334" name="t2" nodeId="1"/>
+</aseba-playground>
+"""
+PLAYGROUND_TEAM = """\
+[team]
+name = "thymios"
+[world]
+kind = "playground"
+file = "w.playground"
+ports = "{ports}"
+[[robots]]
+names = ["t1", "t2"]
+options = {{ tick_period = 0.1 }}
+[[workstations]]
+names = ["desk"]
+"""
+
+
+def _playground_team(tmp_path: Path, text: str) -> TeamPlan:
+    (tmp_path / "w.playground").write_text(PLAYGROUND_WORLD)
+    (tmp_path / "empty.playground").write_text("<aseba-playground/>\n")
+    return parse_team(text, tmp_path / "team.toml")
+
+
+@pytest.fixture
+def aseba(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``asebaplayground`` counts as installed (a unit test starts nothing)."""
+    monkeypatch.setattr(shutil, "which", lambda name: f"/usr/bin/{name}")
+
+
+@pytest.mark.parametrize("choice", ["free", "file"])
+def test_a_playground_world_starts_first_and_links_each_robot_by_name(
+    tmp_path: Path, aseba: None, choice: str
+) -> None:
+    plan = _playground_team(tmp_path, PLAYGROUND_TEAM.format(ports=choice))
+    w = plan.world
+    assert w is not None and w.kind == "playground" and w.name == "playground"
+    assert w.robots == {"t1": 33333, "t2": 33334} and not w.lockstep and w.ports == choice
+    assert [(m.name, m.hardware, m.world) for m in plan.members] == [
+        ("t1", "thymio", None), ("t2", "thymio", None), ("desk", "none", None)
+    ]  # fmt: skip
+    assert members(plan) == 4  # the Playground is no member: t1, t2, desk and mover up
+    world, *rest = processes(plan, seeds(plan, 1), tmp_path, port=7003)
+    assert world.argv[3:5] == ("playground", str(tmp_path / "w.playground"))
+    assert not world.member and world.ready_line == READY and world.stage == 1
+    moved = [a for a in world.argv if a.startswith("--port=")]
+    links = {p.name: " ".join(p.argv).partition("--option link=")[2] for p in rest}
+    if choice == "file":
+        assert not moved
+        assert links == {"t1": '"tcp:127.0.0.1:33333"', "t2": '"tcp:127.0.0.1:33334"', "desk": ""}
+    else:  # free ports, each robot told its own
+        ports = dict(a.removeprefix("--port=").split("=") for a in moved)
+        assert sorted(ports) == ["t1", "t2"]
+        assert links["t1"] == f'"tcp:127.0.0.1:{ports["t1"]}"'
+        assert links["t2"] == f'"tcp:127.0.0.1:{ports["t2"]}"'
+    assert "--option tick_period=0.1" in " ".join(rest[0].argv)
+    assert "--world" not in rest[0].argv
+
+
+def test_a_playground_world_needs_asebaplayground(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    plan = _playground_team(tmp_path, PLAYGROUND_TEAM.format(ports="free"))
+    monkeypatch.setattr(shutil, "which", lambda name: None)
+    with pytest.raises(ConfigError) as caught:
+        processes(plan, seeds(plan, 1), tmp_path, port=7004)
+    assert str(caught.value) == (
+        '[world] kind = "playground" needs asebaplayground on PATH '
+        "(Debian package: aseba; `apt-get install aseba`)"
+    )
+
+
+def test_mover_up_refuses_a_playground_world_without_asebaplayground(tmp_path: Path) -> None:
+    (tmp_path / "w.playground").write_text(PLAYGROUND_WORLD)
+    (tmp_path / "team.toml").write_text(PLAYGROUND_TEAM.format(ports="free"))
+    done = subprocess.run(
+        [sys.executable, "-m", "mover._up", str(tmp_path / "team.toml"),
+         "--out", str(tmp_path / "run")],
+        capture_output=True, text=True, timeout=30, cwd=ROOT, env={**os.environ, "PATH": ""},
+    )  # fmt: skip
+    assert done.returncode == 1
+    assert "Traceback" not in done.stderr + done.stdout
+    assert done.stderr.strip().splitlines() == [
+        'mover up: [world] kind = "playground" needs asebaplayground on PATH '
+        "(Debian package: aseba; `apt-get install aseba`)"
+    ]
+
+
+PLAYGROUND_BAD = [
+    # (what replaces a line of PLAYGROUND_TEAM, the line the error names, what it says)
+    (("ports = ", "until = 5\n"), 6, "world.until: unknown key in a playground world"),
+    (("ports = ", 'ports = "any"\n'), 6, "world.ports: must be 'free' or 'file', got 'any'"),
+    (("file = ", 'file = "missing.playground"\n'), 5, "world.file: cannot read"),
+    (
+        ("file = ", 'file = "empty.playground"\n'),
+        5,
+        "world.file: " + "{tmp}/empty.playground: no <robot",
+    ),
+    (("names = ", 'names = ["t1", "t9"]\n'), 8, "robots[0].names[1]: 't9' is no robot of"),
+    (
+        ("options = ", 'options = { link = "tcp:127.0.0.1:1" }\n'),
+        9,
+        "robots[0].options: the playground world gives each robot its link",
+    ),
+    (
+        ("options = ", 'hardware = "sim"\n'),
+        9,
+        "robots[0].hardware: a playground world's robots are thymio, got 'sim'",
+    ),
+]
+
+
+@pytest.mark.parametrize(
+    ("change", "line", "said"), PLAYGROUND_BAD, ids=[b[2][:30] for b in PLAYGROUND_BAD]
+)
+def test_a_bad_playground_world_names_its_line(
+    tmp_path: Path, change: tuple[str, str], line: int, said: str
+) -> None:
+    start, new = change
+    text = "".join(
+        new if ln.startswith(start) else ln
+        for ln in PLAYGROUND_TEAM.format(ports="free").splitlines(keepends=True)
+    )
+    with pytest.raises(TeamFileError) as caught:
+        _playground_team(tmp_path, text)
+    message = str(caught.value)
+    assert message.startswith(f"{tmp_path / 'team.toml'}:{line}: "), message
+    assert said.format(tmp=tmp_path) in message, message
+    assert "\n" not in message
+
+
+def test_the_thymio_team_file_starts_its_playground() -> None:
+    plan = load_team(ROOT / "teams" / "thymio_gather.toml")
+    assert plan.world is not None and plan.world.kind == "playground"
+    assert plan.world.ports == "free" and list(plan.world.robots) == plan.robots()

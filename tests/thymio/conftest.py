@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import asyncio
-import re
 from collections.abc import AsyncIterator, Awaitable, Callable, Sequence
 from pathlib import Path
 
@@ -11,7 +10,13 @@ import pytest
 import pytest_asyncio
 
 from mover._config import free_port
-from robots.thymio.playground import playground_command, start_playground, stop_playground
+from mover._up._playground import world_robots
+from robots.thymio.playground import (
+    on_ports,
+    playground_command,
+    start_playground,
+    stop_playground,
+)
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -22,17 +27,10 @@ needs_playground = pytest.mark.skipif(
 
 
 def shipped_world(tmp_path: Path) -> tuple[Path, list[int]]:
-    """A copy of worlds/thymio_gather.playground (and its floor) on free ports; the ports."""
-    text = (ROOT / "worlds" / "thymio_gather.playground").read_text()
-    ports = [free_port() for _ in re.findall(r'port="(\d+)"', text)]
-    for old, new in zip(re.findall(r'port="(\d+)"', text), ports, strict=True):
-        text = text.replace(f'port="{old}"', f'port="{new}"')
-    (tmp_path / "thymio_gather.png").write_bytes(
-        (ROOT / "worlds" / "thymio_gather.png").read_bytes()
-    )
-    world = tmp_path / "thymio_gather.playground"
-    world.write_text(text)
-    return world, ports
+    """A copy of worlds/thymio_gather.playground (its floor linked) on free ports; the ports."""
+    world = ROOT / "worlds" / "thymio_gather.playground"
+    ports = {name: free_port() for name in world_robots(world.read_text())}
+    return on_ports(world, ports, tmp_path), list(ports.values())
 
 
 Playground = Callable[[Path, Sequence[int]], Awaitable[asyncio.subprocess.Process]]

@@ -113,14 +113,14 @@ async def test_each_device_against_the_playground(tmp_path: Path, playground: Pl
         await hw.clock.tick()  # (stopped)
 
 
-def _team(tmp_path: Path, ports: list[int]) -> tuple[Path, list[dict[str, Any]]]:
-    """A copy of teams/thymio_gather.toml on ``ports``; its [[robots]] entries."""
-    text = (ROOT / "teams" / "thymio_gather.toml").read_text()
-    for i, port in enumerate(ports):
-        text = text.replace(f"tcp:127.0.0.1:{33333 + i}", f"tcp:127.0.0.1:{port}")
-    team = tmp_path / "team.toml"
-    team.write_text(text)
-    return team, tomllib.loads(text)["robots"]
+def _entries(ports: list[int]) -> list[dict[str, Any]]:
+    """The [[robots]] entries of teams/thymio_gather.toml, each linked to its port."""
+    entries: list[dict[str, Any]] = tomllib.loads(
+        (ROOT / "teams" / "thymio_gather.toml").read_text()
+    )["robots"]
+    for e, port in zip(entries, ports, strict=True):
+        e["options"] = {**e.get("options", {}), "link": f"tcp:127.0.0.1:{port}"}
+    return entries
 
 
 async def _robots(mover_cluster: Any, entries: list[dict[str, Any]]) -> list[Any]:
@@ -159,7 +159,7 @@ async def test_three_thymios_gather_as_processes_of_the_pytest_plugin(
 ) -> None:
     world, ports = shipped_world(tmp_path)
     await playground(world, ports)
-    _, entries = _team(tmp_path, ports)
+    entries = _entries(ports)
     await _robots(mover_cluster, entries)
     names = [e["names"][0] for e in entries]
     outcomes = await asyncio.wait_for(
@@ -169,30 +169,40 @@ async def test_three_thymios_gather_as_processes_of_the_pytest_plugin(
 
 
 @pytest.mark.timeout(120)
-async def test_three_thymios_gather_from_mover_up(tmp_path: Path, playground: Playground) -> None:
-    world, ports = shipped_world(tmp_path)
-    await playground(world, ports)
-    team, entries = _team(tmp_path, ports)
+async def test_three_thymios_gather_from_mover_up_from_nothing(tmp_path: Path) -> None:
+    """``mover up teams/thymio_gather.toml --exit-after-run`` as shipped: the team file starts
+    the Playground on free ports, the robots and the program, and stops them all."""
+    team = ROOT / "teams" / "thymio_gather.toml"
     proc = await asyncio.create_subprocess_exec(
         sys.executable, "-m", "mover", "up", str(team), "--exit-after-run",
         "--out", str(tmp_path / "up"),
         stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.STDOUT,
     )  # fmt: skip
     try:
-        out, _ = await asyncio.wait_for(proc.communicate(), 100)
+        out, _ = await asyncio.wait_for(proc.communicate(), 100)  # 30 s typical: the search
     finally:
         if proc.returncode is None:
             proc.send_signal(signal.SIGINT)
             await proc.wait()
     text = out.decode(errors="replace")
     assert proc.returncode == 0, text
+    ready = next(ln for ln in text.splitlines() if "[playground] playground ready: " in ln)
+    ports = dict(p.split("=") for p in ready.split("ready: ", 1)[1].split())
+    assert list(ports) == ["t1", "t2", "t3"] and "33333" not in ports.values()  # free ports
+    argv = {
+        p["name"]: p["argv"]
+        for p in json.loads((tmp_path / "up" / "team.json").read_text())["processes"]
+    }
     outcomes = {}
-    for e in entries:
-        name = e["names"][0]
+    for name, port in ports.items():
+        assert f'link="tcp:127.0.0.1:{port}"' in argv[name]  # each robot linked by its name
         line = next(ln for ln in text.splitlines() if f"[gather] {name}: " in ln)
         outcomes[name] = {"result": json.loads(line.split(f"[gather] {name}: ", 1)[1])}
     _check_gathered(outcomes)
     assert "Traceback" not in text
+    for number in ports.values():  # the Playground stopped with the team
+        with pytest.raises(ConnectionRefusedError):
+            await asyncio.open_connection("127.0.0.1", int(number))
 
 
 @pytest.mark.timeout(120)
@@ -202,7 +212,7 @@ async def test_the_playground_killed_mid_run_and_back(
     """One line per robot, HardwareLost at the launcher, reconnection, Ctrl-C stops the motors."""
     world, ports = shipped_world(tmp_path)
     first = await playground(world, ports)
-    _, entries = _team(tmp_path, ports)
+    entries = _entries(ports)
     procs = await _robots(mover_cluster, entries)
     names = [e["names"][0] for e in entries]
     logs = [tmp_path / "mover-logs" / f"{name}.log" for name in names]
