@@ -64,7 +64,12 @@ ROBOTS_MESSAGES = {
 #: The private modules of mover that the packages above it may use (docs/architecture.md says
 #: why): the table reader, a finished task's error, and ``mover up``'s plan for ``mover demo``.
 MOVER_INTERNALS = {
-    "robots": {"mover._futures", "mover._endpoints", "mover._orphans"},
+    "robots": {
+        "mover._futures",
+        "mover._endpoints",
+        "mover._orphans",
+        "mover._up",  # robots.thymio.playground: the Playground file's robots and ports, one reader
+    },
     "sim_hw": {"mover._tables", "mover._keylines", "mover._futures", "mover._endpoints"},
     "programs": set(),
     "experiments": {"mover._up"},
