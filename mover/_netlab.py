@@ -364,8 +364,22 @@ class Netlab:
     # -- faults --------------------------------------------------------------------------------
 
     def link(self, host: str, up: bool) -> None:
-        """Plug ``host``'s cable in (``up``) or pull it (its bridge end set down)."""
-        _ip("link", "set", self.hosts[host].link, "up" if up else "down")
+        """Plug ``host``'s cable in (``up``) or pull it (its bridge end set down). Plugged in,
+        it returns once both ends carry (up to 5 s): a veth's far end comes up a moment later.
+        Every host's neighbour cache is flushed then, as a replugged cable would leave it: an
+        address that went unanswered while cut off is otherwise "no route to host" for seconds."""
+        h = self.hosts[host]
+        _ip("link", "set", h.link, "up" if up else "down")
+        if up:
+            for other in self.hosts.values():
+                _ip("-n", other.ns, "neigh", "flush", "all", check=False)
+        deadline = time.monotonic() + 5.0
+        while up and time.monotonic() < deadline:
+            ends = _ip("-o", "link", "show", h.link, check=False)
+            ends += _ip("-n", h.ns, "-o", "link", "show", "eth0", check=False)
+            if ends.count("state UP") == 2:
+                return
+            time.sleep(0.02)
 
     @contextlib.asynccontextmanager
     async def partition(self, host: str, seconds: float | None = None) -> AsyncIterator[None]:

@@ -23,7 +23,7 @@ pytestmark = [
     ),
 ]
 
-CONNECT = "import socket,sys; socket.create_connection((sys.argv[1], 9000), timeout=1).close()"
+CONNECT = "import socket,sys; socket.create_connection((sys.argv[1], 9000), timeout=3).close()"
 SERVE = textwrap.dedent(
     """
     import socket, subprocess, sys, time
