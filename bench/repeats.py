@@ -1,17 +1,20 @@
 """Does a seeded lock-step run repeat however its processes are scheduled?
 
-    python bench/repeats.py [--runs 8] [--seed 7] [--hogs 2] [--stalls] [--out DIR]
+    python bench/repeats.py [--runs 8] [--seed 7] [--hogs 2] [--stalls] [--control-delay K]
+                            [--out DIR]
 
 Runs ``mover demo --seed SEED`` (search and rescue on real processes) ``--runs`` times beside
-``--hogs`` busy-loop processes, with ``--stalls`` its processes SIGSTOPped for moments of up to
-0.3 s (``mover.testing.stutter``, seeded by the run's number), and counts the distinct
-recordings (``world.jsonl``, byte for byte) and the distinct reports (the demo's report without
-its wall-clock figures). One run in each is the baseline: the same command on the same machine.
-Where recordings part, the first tick whose commands differ is printed.
+``--hogs`` busy-loop processes, on a world with ``--control-delay K`` (default 0), with
+``--stalls`` its processes SIGSTOPped for moments of up to 0.3 s (``mover.testing.stutter``,
+seeded by the run's number), and counts the distinct recordings (``world.jsonl``, byte for
+byte) and the distinct reports (the demo's report without its wall-clock figures). One run in
+each is the baseline: the same command on the same machine. Where recordings part, the first
+tick whose commands differ is printed.
 
 Each run prints one line; the last line is one JSON object: ``runs``, ``seed``, ``hogs``,
-``stalls``, ``recordings`` and ``reports`` (distinct counts: 1 and 1 when runs repeat),
-``failed`` (runs that did not end with status 0), ``wall_s`` (median seconds a run).
+``stalls``, ``control_delay``, ``recordings`` and ``reports`` (distinct counts: 1 and 1 when
+runs repeat), ``failed`` (runs that did not end with status 0), ``wall_s`` (median seconds a
+run).
 """
 
 from __future__ import annotations
@@ -43,7 +46,11 @@ async def main(args: argparse.Namespace) -> dict[str, object]:
             out = base / f"run{i}"
             t0 = time.perf_counter()
             stall = i if args.stalls else None
-            code, text = await run_demo(out, "--seed", str(args.seed), stall_seed=stall)
+            code, text = await run_demo(
+                out,
+                *("--seed", str(args.seed), "--control-delay", str(args.control_delay)),
+                stall_seed=stall,
+            )
             wall = time.perf_counter() - t0
             walls.append(wall)
             if code != 0:
@@ -64,6 +71,7 @@ async def main(args: argparse.Namespace) -> dict[str, object]:
         "seed": args.seed,
         "hogs": args.hogs,
         "stalls": args.stalls,
+        "control_delay": args.control_delay,
         "recordings": len(recordings),
         "reports": len(reports),
         "failed": failed,
@@ -77,8 +85,11 @@ if __name__ == "__main__":
     parser.add_argument("--seed", type=int, default=7, help="the demo's seed (default 7)")
     parser.add_argument("--hogs", type=int, default=2, help="busy loops beside (default 2)")
     parser.add_argument("--stalls", action="store_true", help="SIGSTOP its processes briefly")
+    parser.add_argument("--control-delay", type=int, default=0, help="ticks (default 0)")
     parser.add_argument("--out", help="folder for the runs' output (default: a new temporary)")
     parsed = parser.parse_args()
     if not 1 <= parsed.runs <= 100 or not 0 <= parsed.hogs <= 16:
         parser.error("--runs must be 1..100 and --hogs 0..16")
+    if not 0 <= parsed.control_delay <= 100:
+        parser.error("--control-delay must be 0..100")
     print(json.dumps(asyncio.run(main(parsed))))

@@ -34,6 +34,7 @@ from mover._up import (
 )
 from mover.cli import UsageError, json_object, positive
 from sim_hw import STATE_TOPIC, WorldFileError, load_world
+from sim_hw._process import control_delay
 
 from ._common import writable_dir
 
@@ -60,13 +61,22 @@ def register(sub: Any) -> None:
         help="the run seed (the world's sensor noise and the program's choices derive from it)",
     )
     p.add_argument("--timeout", type=positive, default=120.0, help="wall seconds before giving up")
+    p.add_argument(
+        "--control-delay",
+        type=control_delay,
+        default=0,
+        metavar="K",
+        help="the world applies a command K ticks after it was handed in (default 0; what a "
+        "team across hosts runs with, see docs/reproducible-runs.md)",
+    )
     p.set_defaults(func=run)
 
 
 @dataclass(frozen=True)
 class DemoSettings:
     """A demo run: the program and its arguments, the world file and its robots, the goal
-    (its first target, for the report), where to write, the run seed, the time allowed."""
+    (its first target, for the report), where to write, the run seed, the time allowed, the
+    world's control delay in ticks."""
 
     program: str
     world: Path
@@ -76,6 +86,7 @@ class DemoSettings:
     out: Path = Path("out/demo")
     seed: int = 1
     timeout: float = 120.0
+    control_delay: int = 0
 
 
 def settings(args: argparse.Namespace) -> DemoSettings:
@@ -107,6 +118,7 @@ def settings(args: argparse.Namespace) -> DemoSettings:
         out=out,
         seed=args.seed,
         timeout=args.timeout,
+        control_delay=args.control_delay,
     )
 
 
@@ -123,7 +135,7 @@ def team_plan(s: DemoSettings, source: Path = TEAM_FILE) -> TeamPlan:
     return replace(
         plan,
         seed=s.seed,
-        world=replace(plan.world, file=s.world, expect=len(robots)),
+        world=replace(plan.world, file=s.world, expect=len(robots), control_delay=s.control_delay),
         members=robots,
         program=replace(plan.program, name=s.program, args=s.program_args, members=()),
     )

@@ -38,6 +38,14 @@ class IdleClock(Protocol):
         the step is decided, so that it stops on the same tick whatever the wall clock does)."""
         ...
 
+    def reach(self, t: float) -> float:
+        """Where a robot is sure to get past ``t`` whatever the wall clock does, for a hold:
+        ``t`` itself, or with a control delay of K ticks (a lock-step world that runs up to K
+        ticks ahead of the commands) a time between the ticks K - 1 and K after ``t``'s: a
+        ``distributed_or``'s losers go on to there and hold, however far the world let each
+        run before it was asked (docs/reproducible-runs.md)."""
+        ...
+
     def idling(self) -> AbstractAsyncContextManager[None]:
         """Be idle for the block: the drive is stopped, and a lock-step world neither waits
         for this robot's commands nor advances a tick for it. Entering and leaving are

@@ -238,6 +238,10 @@ class HostClock(RunClock):
         """Return once this robot handed in a command for a tick after time ``t``."""
         await self._hw.clock.passed(t)
 
+    def reach(self, t: float) -> float:
+        """How far past ``t`` the robot surely gets (the hardware clock's ``reach``)."""
+        return float(self._hw.clock.reach(t))
+
     def hold(self, t: float | None) -> None:
         """Hand in no command on readings later than ``t`` until ``hold(None)``."""
         self._hw.clock.hold(t)

@@ -107,6 +107,10 @@ class _Ticking:
         finally:
             self.idle = False
 
+    def reach(self, t: float) -> float:
+        """``t``: no world runs ahead of this robot's commands."""
+        return t
+
     def hold(self, t: float | None) -> None:
         """Hand in no command on readings later than ``t`` until ``hold(None)``."""
         self.held = t

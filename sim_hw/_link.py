@@ -44,6 +44,9 @@ FRAME_WAIT = 1.0
 """Seconds a robot waits for its tick's frame before it asks with a call."""
 FRAME_QUEUE = 64
 """Frames a robot keeps unread at most (one comes per tick)."""
+MAX_LEAD = 100
+"""The most ticks of control delay a world process takes (``--control-delay``) and a robot
+accepts from one."""
 WORLD_GRACE = 1.5
 """Seconds the world may be gone from the team (a missed lease on a loaded machine) before
 a robot takes it for lost."""
@@ -55,6 +58,10 @@ class WorldLost(HardwareLost):
 
 class WorldLink(Protocol):
     """One robot's connection to its world (the door in process, or a world process)."""
+
+    lead: int
+    """The world's control delay: how many ticks it may run ahead of this robot's last
+    command (0 in plain lock-step)."""
 
     async def exchange(self, tick: int, command: Command) -> Readings:
         """Hand in ``command`` for ``tick``; the readings after that tick."""
@@ -79,6 +86,7 @@ class _DoorLink:
 
     def __init__(self, door: LockstepDoor[Any], robot: str) -> None:
         self.door, self.robot = door, robot
+        self.lead = door.control_delay
 
     async def exchange(self, tick: int, command: Command) -> Readings:
         readings: Readings = await self.door.step(self.robot, tick, command)
@@ -153,6 +161,7 @@ class _RemoteLink:
         self.offered = False
         self.warm = False  # the first tick is a call: by its end the world has our subscription
         self.standing: Command = {}  # the command we idle with (asked again on a check)
+        self.lead = 0  # the world's control delay, from its answer to the join
 
     async def join(self, spec: Mapping[str, Any] | None) -> dict[str, Any]:
         try:
@@ -161,6 +170,14 @@ class _RemoteLink:
             self.frames.close()
             raise
         self.offered = bool(joined.get("frames"))
+        lead = joined.get("lead", 0)
+        if not isinstance(lead, int) or not 0 <= lead <= MAX_LEAD:
+            self.frames.close()
+            raise WorldLost(
+                f"world {self.world!r} answered the join with a control delay of "
+                f"{lead!r} ticks (0 to {MAX_LEAD})"
+            )
+        self.lead = lead
         if not self.offered:
             self.frames.close()
         return joined

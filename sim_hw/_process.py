@@ -25,6 +25,7 @@ from mover import MoverError, Node, NodeConfig, TeamCredentials
 from mover._endpoints import bound
 from mover.cli import bounded, member_name, positive
 from sim_hw._frames import read_command, readings_frame, topics
+from sim_hw._link import MAX_LEAD
 from sim_hw._lockstep import Command, LockstepDoor, RobotDropped
 
 log = logging.getLogger("sim_hw.process")
@@ -46,10 +47,9 @@ count = bounded(int, 0, MAX_COUNT)
 """An argparse type: a whole number from 0 to MAX_COUNT."""
 rate = bounded(float, 0.0, MAX_RATE)
 """An argparse type: a number from 0 to MAX_RATE."""
-MAX_DELAY = 100
 """The most ticks of control delay a command line may ask for."""
-control_delay = bounded(int, 0, MAX_DELAY)
-"""An argparse type: a control delay in ticks, from 0 to MAX_DELAY."""
+control_delay = bounded(int, 0, MAX_LEAD)
+"""An argparse type: a control delay in ticks, from 0 to MAX_LEAD."""
 
 
 def add_world_arguments(
@@ -120,7 +120,8 @@ def serve(node: Node, door: LockstepDoor[Any], *, frames: bool = True) -> None:
         _TickFrames(node, door)
 
     async def join(robot: str, spec: dict[str, Any]) -> dict[str, Any]:
-        return {**await door.join(robot, spec or None), "frames": offered}
+        joined = await door.join(robot, spec or None)
+        return {**joined, "frames": offered, "lead": door.control_delay}
 
     async def step(robot: str, tick: int, command: dict[str, Any]) -> dict[str, Any]:
         readings: dict[str, Any] = await door.step(robot, tick, command)

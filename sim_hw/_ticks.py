@@ -38,6 +38,9 @@ class Ticks:
       return, the world waits for this robot's command for the tick of ``readings``. A block
       left by cancellation does not wake the robot (it is going away); an exception does.
     * ``passed(t)`` returns once a command was handed in at a tick whose time is after ``t``.
+    * ``reach(t)``: how far past ``t`` the robot surely gets, the world's control delay
+      (``link.lead`` ticks of ``period``) on: a time between the ticks K - 1 and K after ``t``'s,
+      half a tick from either so that float times compare exactly.
 
     ``time_of(readings)`` is a tick's time (simulated seconds, or a round number); ``tick_of``
     its number; ``after(command, readings)`` runs when an exchange ends (in its task), before
@@ -52,12 +55,14 @@ class Ticks:
         *,
         tick_of: Callable[[Readings], int],
         time_of: Callable[[Readings], float],
+        period: float,
         after: Callable[[Command, Readings], None] | None = None,
     ) -> None:
         self.robot = robot
         self.readings = readings
         self._link = link
         self._tick_of, self._time_of, self._after = tick_of, time_of, after
+        self._period = period
         self._task: asyncio.Task[tuple[int, Command, Readings]] | None = None
         self._exchanges = 0  # exchanges started
         self._taken = 0  # the last exchange whose readings are in (see take)
@@ -164,6 +169,14 @@ class Ticks:
         that a loser stops on the same tick whatever the wall clock does."""
         self._hold = t
         self._pulse()
+
+    def reach(self, t: float) -> float:
+        """``t``, or with a control delay of K ticks ``t`` + (K - 1/2) ticks (see the class):
+        while a robot that finished at ``t`` holds, the world runs up to K ticks past it, and
+        a robot that waits until it ``passed`` there has the same readings however the wall
+        clock went."""
+        lead = self._link.lead
+        return t + (lead - 0.5) * self._period if lead else t
 
     async def passed(self, t: float) -> None:
         """Return once a command was handed in with readings of time ``t`` or later: this

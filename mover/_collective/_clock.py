@@ -66,7 +66,10 @@ class TimedOp:
         return result
 
     async def passed(self, t: float) -> dict[str, Any]:
-        """Once the operation finished or the clock passed ``t``: which (see or_passed)."""
+        """Once the operation finished or the clock passed ``t`` as far as it surely can
+        (``clock.reach(t)``: a loser stops there whatever the scheduling): which (see
+        or_passed)."""
+        t = self.clock.reach(t)
         if self.finished_at is None and not self.op.done():
             waiter = asyncio.ensure_future(self.clock.passed(t))
             try:

@@ -107,6 +107,10 @@ class ThymioClock:
         """Nothing to do: a real robot goes on without ticks."""
         return contextlib.nullcontext()
 
+    def reach(self, t: float) -> float:
+        """``t``: no world runs ahead of this robot's commands."""
+        return t
+
     def hold(self, t: float | None) -> None:
         """The next ``tick()`` waits while the readings are later than ``t`` (see the module)."""
         self._hold = t

@@ -62,6 +62,7 @@ class SimHardware:
             readings,
             tick_of=lambda r: int(r["tick"]),
             time_of=lambda r: float(r["t"]),
+            period=TICK,
         )
         self._v = 0.0
         self._w = 0.0
@@ -107,6 +108,11 @@ class SimHardware:
     def idling(self) -> contextlib.AbstractAsyncContextManager[None]:
         """Be idle for the block: the drive stopped, a lock-step world not waiting for us."""
         return self._ticks.idling(self._stopped)
+
+    def reach(self, t: float) -> float:
+        """How far past ``t`` this robot surely gets: ``t``, or later with a control delay
+        (see ``Ticks.reach``)."""
+        return self._ticks.reach(t)
 
     def hold(self, t: float | None) -> None:
         """Hand in nothing on readings later than ``t`` until ``hold(None)`` (see ``Ticks``)."""
@@ -257,7 +263,7 @@ class _Clock:
 
     def __init__(self, hw: SimHardware) -> None:
         self.now, self.tick, self.sleep, self.ticking = hw.now, hw.tick, hw.sleep, hw.ticking
-        self.idling, self.passed, self.hold = hw.idling, hw.passed, hw.hold
+        self.idling, self.passed, self.hold, self.reach = hw.idling, hw.passed, hw.hold, hw.reach
 
 
 class _Drive:

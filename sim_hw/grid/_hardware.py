@@ -54,6 +54,7 @@ class GridRobot:
             readings,
             tick_of=lambda r: int(r["round"]),
             time_of=lambda r: float(r["round"]),
+            period=1.0,
             after=self._moved,
         )
         self._action: dict[str, Any] = {}
@@ -129,6 +130,11 @@ class GridRobot:
     def _stay(self) -> dict[str, Any]:
         self._action.pop("move", None)
         return {}
+
+    def reach(self, t: float) -> float:
+        """How far past ``t`` this robot surely gets: ``t``, or later with a control delay
+        (see ``Ticks.reach``)."""
+        return self._ticks.reach(t)
 
     def hold(self, t: float | None) -> None:
         """Hand in nothing on readings later than ``t`` until ``hold(None)`` (see ``Ticks``)."""
@@ -269,7 +275,7 @@ class _Clock:
     def __init__(self, robot: GridRobot) -> None:
         self.now, self.ended, self.tick = robot.now, robot.ended, robot.tick
         self.owned, self.idling = robot.owned, robot.idling
-        self.hold, self.passed = robot.hold, robot.passed
+        self.hold, self.passed, self.reach = robot.hold, robot.passed, robot.reach
 
 
 class _Drive:

@@ -13,6 +13,10 @@ class UnmodelledHold:
 
     held: float | None = None
 
+    def reach(self, t: float) -> float:
+        """``t``: no world runs ahead."""
+        return t
+
     def hold(self, t: float | None) -> None:
         """Record ``t`` (the time to hold at; None: no hold)."""
         self.held = t

@@ -9,8 +9,12 @@ from typing import Any
 
 import pytest
 
+from mover import Outcome, RunTeam
+from robots.hal import Hardware, HardwareLost
+from robots.process import HostClock
 from sim_hw import RobotSpec, SonarSpec, World, WorldServer, WorldSpec, in_process
 from sim_hw._delayed import Delayed
+from tests.helpers.loopback import team_nodes
 
 TICKS = 40
 
@@ -105,3 +109,63 @@ async def test_where_the_world_stops_when_all_idle_is_not_the_order_of_the_idles
     """It applies every command handed in before (else, a idling first, it stopped where b's
     commands ended, and the robots woke two ticks earlier)."""
     assert await _stopped_at("a") == await _stopped_at("b") == 7
+
+
+async def _or_stops(losers_pause: float) -> dict[str, list[int]]:
+    """A team of three on a K = 2 world in this process, over zenoh on loopback: b finishes
+    its operation at tick 10, a and c walk on until tick 40, pausing ``losers_pause`` wall
+    seconds before each of their ticks. The tick each member reads after the OR, and after
+    its next tick."""
+    world = World(WorldSpec(size=(6.0, 6.0), name="delay-or"), seed=1)
+    server = WorldServer(world, expect=3, control_delay=2, timeout=60)
+    names = ("a", "b", "c")
+    hws = await asyncio.gather(
+        *(in_process(server, n, {"pose": [1.0 + 2 * i, 1.0, 0.0]}) for i, n in enumerate(names))
+    )
+    lost: asyncio.Future[HardwareLost] = asyncio.get_running_loop().create_future()
+    clocks = [HostClock(hw, lost) for hw in hws]
+    read: dict[str, list[int]] = {}
+
+    def tick_of(hw: Hardware) -> int:
+        return round(hw.clock.now() / hw.clock.tick_period)
+
+    async def member(team: RunTeam, hw: Hardware) -> None:
+        async def walk() -> int:
+            until = 10 if team.me == "b" else 40
+            while tick_of(hw) < until:
+                if team.me != "b":
+                    await asyncio.sleep(losers_pause)
+                hw.drive.set_velocity(0.2, 0.0)
+                await hw.clock.tick()
+            return tick_of(hw)
+
+        outcome: Outcome = await team.distributed_or(walk)
+        assert (outcome.winner, outcome.result) == ("b", 10)
+        read[team.me] = [tick_of(hw)]
+        await hw.clock.tick()
+        read[team.me].append(tick_of(hw))
+
+    try:
+        async with team_nodes(names, "delay-or") as nodes:
+            teams = [
+                RunTeam(n, "or-delayed", names, clock=c) for n, c in zip(nodes, clocks, strict=True)
+            ]
+            await asyncio.wait_for(
+                asyncio.gather(*(member(t, hw) for t, hw in zip(teams, hws, strict=True))), 30
+            )
+        assert not lost.done()
+    finally:
+        for clock in clocks:
+            await clock.aclose()
+        await server.door.aclose()
+    return read
+
+
+@pytest.mark.processes
+async def test_an_or_s_losers_stop_k_ticks_past_the_winner_however_slow_they_were() -> None:
+    """With K = 2 the world runs up to two ticks past the winner's finish while the question
+    travels: losers that raced on read tick 12 when asked, slow ones 10 or 11. Every loser
+    goes on to tick 12 and holds there, so the run after the OR is the same either way
+    (before, slow losers stopped at 11, and the demo's runs under load parted: issue 23)."""
+    fast, slow = await _or_stops(0.0), await _or_stops(0.05)
+    assert fast == slow == {"a": [12, 13], "b": [10, 11], "c": [12, 13]}
