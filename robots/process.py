@@ -227,6 +227,7 @@ class HostClock(RunClock):
         self._lost = lost
         self._task: asyncio.Task[None] | None = None
         self._stop = asyncio.Event()
+        self._entered = asyncio.Event()
         self._waits = 0
         self._sentinel = asyncio.get_running_loop().create_task(self._watch())
 
@@ -250,17 +251,33 @@ class HostClock(RunClock):
     async def idling(self) -> AsyncIterator[None]:
         """Idle for the block (a collective waiting for the others), engaged again after.
 
-        Blocks of concurrent runs nest: the first releases, the last engages. Entering starts
-        the idle task and does not wait for the world to acknowledge it (leaving does)."""
+        Blocks of concurrent runs nest: the first releases, the last engages. Entering returns
+        once the world has acknowledged the idle, and so has every command handed in before
+        (with a control delay a command can be on its way still): a team step's members report
+        only then, and the world rests at the same tick however the messages raced. Leaving
+        waits for the world too."""
         self._waits += 1
         if self._waits == 1:
             self.release()
         try:
+            await self._idle_entered()
             yield
         finally:
             self._waits -= 1
             if self._waits == 0:
                 await self.engage()
+
+    async def _idle_entered(self) -> None:
+        """Until the idle task is inside the hardware's ``idling()`` (or has ended: the hardware
+        lost, which ``engage`` raises)."""
+        task = self._task
+        if task is None:
+            return
+        entered = asyncio.ensure_future(self._entered.wait())
+        try:
+            await asyncio.wait({entered, task}, return_when=asyncio.FIRST_COMPLETED)
+        finally:
+            entered.cancel()
 
     async def engage(self) -> None:
         """Stop idling; on return the world waits for this robot's commands."""
@@ -279,10 +296,15 @@ class HostClock(RunClock):
         if self._lost.done() or (old is not None and not self._stop.is_set()):
             return  # idle already (or the hardware is lost)
         self._stop = asyncio.Event()
-        self._task = asyncio.get_running_loop().create_task(self._idle(self._stop, old))
+        self._entered = asyncio.Event()
+        self._task = asyncio.get_running_loop().create_task(
+            self._idle(self._stop, self._entered, old)
+        )
         self._task.add_done_callback(failure)
 
-    async def _idle(self, stop: asyncio.Event, after: asyncio.Task[None] | None) -> None:
+    async def _idle(
+        self, stop: asyncio.Event, entered: asyncio.Event, after: asyncio.Task[None] | None
+    ) -> None:
         if after is not None:
             await asyncio.wait([after])  # the idle task before has left idling()
         if stop.is_set():
@@ -290,6 +312,7 @@ class HostClock(RunClock):
         self._hw.drive.stop()
         with contextlib.suppress(HardwareLost):  # the sentinel sees it too
             async with self._hw.clock.idling():
+                entered.set()
                 await stop.wait()
 
     async def _watch(self) -> None:

@@ -45,6 +45,8 @@ class Delayed(Schedule):
         self.k = k
         self.queue: dict[int, dict[str, Command]] = {}  # tick -> robot -> its command
         self.since: dict[str, int] = {}  # robot -> the first tick whose command is waited for
+        self.owed: dict[str, int] = {}  # idle robot -> the tick it idles from (see idled)
+        self._paid: dict[str, asyncio.Future[None]] = {}  # owed robot -> its settled() wait
         # (tick, {robot: readings after it}), the last k + 1 ticks
         self.history: deque[tuple[int, dict[str, Readings]]] = deque(maxlen=k + 1)
 
@@ -100,7 +102,7 @@ class Delayed(Schedule):
         st = door.stepper
         while not door.closed:
             need = st.tick - self.k
-            due = len(st.robots()) - len(door.idles) - self._late(need) if need >= 0 else 0
+            due = len(self._waited(need)) if need >= 0 else 0
             if due > 0:
                 # counting first: the scan runs once a tick, not once a command
                 if len(self.queue.get(need, {})) < due or self._missing():
@@ -110,6 +112,7 @@ class Delayed(Schedule):
             door.run_tick(self.queue.pop(need, {}))
             self.history.append((st.tick, {r: st.readings(r) for r in st.robots()}))
             self.since = {r: t for r, t in self.since.items() if t > need}
+            self._settle({r: t for r, t in self.owed.items() if t > need + 1})
         if door.joins and not door.busy():
             door.admit_now()
 
@@ -118,8 +121,36 @@ class Delayed(Schedule):
         readings."""
         self.since[robot] = self.door.stepper.tick
 
+    def idled(self, robot: str, at: int) -> None:
+        """``robot`` went idle on the readings of tick ``at``: its commands for the ticks before
+        are still waited for (they may come after the call that idled it: frames and calls
+        are not ordered), so that the ticks they apply at do not run on its standing command
+        by the wall clock."""
+        if at > self.door.stepper.tick - self.k:
+            self.owed[robot] = at
+
+    async def settled(self, robot: str) -> None:
+        """Return once the world has every command ``robot`` owes (a command's frame may come
+        after the call that idles the robot): a robot is idle only from then on, so that the
+        world is at rest at the same tick whatever the wall clock did when the last member of
+        a step goes idle, and the robots wake there."""
+        if robot in self.owed:
+            paid = self._paid.get(robot)
+            if paid is None:
+                paid = self._paid[robot] = asyncio.get_running_loop().create_future()
+            await asyncio.shield(paid)
+
+    def _settle(self, owed: dict[str, int]) -> None:
+        """``owed`` is what the robots owe now: wake the waits of those that owe nothing."""
+        self.owed = owed
+        for robot in [r for r in self._paid if r not in owed]:
+            paid = self._paid.pop(robot)
+            if not paid.done():
+                paid.set_result(None)
+
     def woke(self, robot: str) -> None:
         """``robot`` is awake again: its commands are waited for from now on."""
+        self._settle({r: t for r, t in self.owed.items() if r != robot})
         self.since[robot] = self.door.stepper.tick
 
     def started(self) -> None:
@@ -133,23 +164,32 @@ class Delayed(Schedule):
             door.silent(robot, f"sent no {door.stepper.words[0]} for")
         self.pump()
 
+    async def aclose(self) -> None:
+        """The door closes: nothing more is owed (a robot waiting to idle is answered)."""
+        self._settle({})
+
     def removed(self, robot: str) -> None:
         """``robot`` left the world: forget its commands."""
         self.since.pop(robot, None)
+        self._settle({r: t for r, t in self.owed.items() if r != robot})
         for commands in self.queue.values():
             commands.pop(robot, None)
 
-    def _late(self, need: int) -> int:
-        """How many robots the world does not wait for at tick ``need`` though they are not
-        idle (they joined or woke after it)."""
+    def _waited(self, need: int) -> list[str]:
+        """The robots whose command for tick ``need`` the world waits for: those not idle that
+        joined or woke by then, and idle ones that owe it (see idled); in id order."""
         idles = self.door.idles
-        return sum(1 for r, t in self.since.items() if t > need and r not in idles)
+        return [
+            r
+            for r in sorted(self.door.stepper.robots())
+            if (r not in idles and self.since.get(r, need) <= need)
+            or (r in idles and self.owed.get(r, 0) > need)
+        ]
 
     def _missing(self) -> list[str]:
         """The robots whose command for the tick the world would run next is not in."""
-        door = self.door
-        need = door.stepper.tick - self.k
+        need = self.door.stepper.tick - self.k
         if need < 0:
             return []
         got = self.queue.get(need, {})
-        return [r for r in door.busy() if r not in got and self.since.get(r, need) <= need]
+        return [r for r in self._waited(need) if r not in got]

@@ -67,8 +67,10 @@ class WorldLink(Protocol):
         """Hand in ``command`` for ``tick``; the readings after that tick."""
         ...
 
-    async def idle(self, command: Command) -> Readings:
-        """The world stops waiting for this robot; ``command`` stands for it at every tick."""
+    async def idle(self, command: Command, at: int) -> Readings:
+        """The world stops waiting for this robot; ``command`` stands for it at every tick.
+        ``at``: the tick of the robot's readings (its commands for the ticks before are owed:
+        see ``LockstepDoor.idle``); answered once the world has them all."""
         ...
 
     async def wake(self) -> Readings:
@@ -92,8 +94,9 @@ class _DoorLink:
         readings: Readings = await self.door.step(self.robot, tick, command)
         return readings
 
-    async def idle(self, command: Command) -> Readings:
-        return self.door.idle(self.robot, command)
+    async def idle(self, command: Command, at: int) -> Readings:
+        self.door.idle(self.robot, command, at)
+        return await self.door.settled(self.robot)
 
     async def wake(self) -> Readings:
         return self.door.wake(self.robot)
@@ -195,9 +198,9 @@ class _RemoteLink:
         self.warm = self.offered
         return readings
 
-    async def idle(self, command: Command) -> Readings:
+    async def idle(self, command: Command, at: int) -> Readings:
         self.standing = dict(command)
-        readings: Readings = await self.call("idle", self.robot, self.standing)
+        readings: Readings = await self.call("idle", self.robot, self.standing, at)
         return readings
 
     async def wake(self) -> Readings:

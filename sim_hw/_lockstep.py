@@ -183,14 +183,26 @@ class LockstepDoor(Generic[S]):
         # call (its task was cancelled) must not take the retry's readings down with it.
         return await asyncio.shield(waiter)
 
-    def idle(self, robot: str, command: Command) -> Readings:
+    def idle(self, robot: str, command: Command, at: int | None = None) -> Readings:
         """Mark ``robot`` idle: ``command`` (its stopped drive) stands for it at every tick and
-        the door does not wait for it; returns its readings now. Idempotent (a retry)."""
+        the door does not wait for it; returns its readings now. Idempotent (a retry). ``at``:
+        the tick of the robot's readings as it went idle; its commands for the ticks before
+        are owed, and with a control delay the world still waits for those that have not come
+        yet (a command's frame can arrive after the call that idles the robot)."""
         self._check(robot)
         if robot not in self.idles:
             self.idles[robot] = dict(command)
+            if at is not None:
+                self.schedule.idled(robot, max(0, min(at, self.stepper.tick)))
             log.debug("robot %s idle at %s %d", robot, self.stepper.words[1], self.stepper.tick)
             self.schedule.pump()
+        return self.current(robot)
+
+    async def settled(self, robot: str) -> Readings:
+        """``robot``'s readings once the world has every command it owes (see idle): at once
+        without a control delay. Raises :class:`RobotDropped` if it leaves meanwhile."""
+        await self.schedule.settled(robot)
+        self._check(robot)
         return self.current(robot)
 
     def wake(self, robot: str) -> Readings:

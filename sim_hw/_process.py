@@ -127,8 +127,9 @@ def serve(node: Node, door: LockstepDoor[Any], *, frames: bool = True) -> None:
         readings: dict[str, Any] = await door.step(robot, tick, command)
         return readings
 
-    def idle(robot: str, command: dict[str, Any]) -> dict[str, Any]:
-        readings: dict[str, Any] = door.idle(robot, command)
+    async def idle(robot: str, command: dict[str, Any], at: int | None = None) -> dict[str, Any]:
+        door.idle(robot, command, at)
+        readings: dict[str, Any] = await door.settled(robot)  # its last commands are in
         return readings
 
     def wake(robot: str) -> dict[str, Any]:

@@ -132,6 +132,13 @@ class Schedule:
     def placed(self, robot: str) -> None:
         """``robot`` was placed in the world (nothing to do here)."""
 
+    def idled(self, robot: str, at: int) -> None:
+        """``robot`` is idle from tick ``at``: its commands for the ticks before are owed
+        (nothing to do here: the world cannot be past them)."""
+
+    async def settled(self, robot: str) -> None:
+        """Return once the world has every command ``robot`` owes (see idled): at once here."""
+
     def woke(self, robot: str) -> None:
         """``robot`` is not idle any more (nothing to do here)."""
 

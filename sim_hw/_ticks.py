@@ -197,7 +197,8 @@ class Ticks:
         self._idle = True  # (no await since _finish: no exchange can start in between)
         self._pulse()
         try:
-            self.readings = await self._guard(self._link.idle(stop()))
+            at = self._tick_of(self.readings)  # the ticks before: commands handed in
+            self.readings = await self._guard(self._link.idle(stop(), at))
             watch = asyncio.get_running_loop().create_task(self._watch())
             awake = True
             try:

@@ -169,3 +169,41 @@ async def test_an_or_s_losers_stop_k_ticks_past_the_winner_however_slow_they_wer
     (before, slow losers stopped at 11, and the demo's runs under load parted: issue 23)."""
     fast, slow = await _or_stops(0.0), await _or_stops(0.05)
     assert fast == slow == {"a": [12, 13], "b": [10, 11], "c": [12, 13]}
+
+
+async def _last_command_applied(idle_first: bool) -> list[Any]:
+    """K = 2, robots a and b. a hands in its commands for ticks 0-2 and goes idle on the
+    readings of tick 3; its command for tick 2 reaches the world before or after the call
+    that idles it (a frame and a call are not ordered). The commands applied, tick by tick."""
+    world = World(WorldSpec(size=(4.0, 4.0), name="delay"), seed=1)
+    server = WorldServer(world, expect=2, control_delay=2)
+    applied: list[Any] = []
+    server.door.on_tick.append(lambda commands: applied.append(dict(commands)))
+    door = server.door
+    await asyncio.gather(
+        in_process(server, "a", {"pose": [1.0, 1.0, 0.0]}),
+        in_process(server, "b", {"pose": [3.0, 3.0, 0.0]}),
+    )
+    go, stop = {"v": 0.5, "w": 0.0, "push": None}, {"v": 0.0, "w": 0.0, "push": None}
+    for tick in range(2):
+        door.hand_in("a", tick, go)
+        door.hand_in("b", tick, stop)
+    assert world.tick == 4  # two ticks ahead of the commands
+    if idle_first:
+        door.idle("a", stop, at=3)
+    door.hand_in("a", 2, go)
+    if not idle_first:
+        door.idle("a", stop, at=3)
+    for tick in range(2, 6):
+        door.hand_in("b", tick, stop)
+    await door.aclose()
+    return [c.get("a") for c in applied]
+
+
+async def test_an_idle_that_overtakes_the_robot_s_last_command_waits_for_it() -> None:
+    """a's command for tick 2 applies at tick 4 whichever came first (before, the world ran
+    tick 4 on a's standing command when the idle came first, and dropped the late command)."""
+    go, stop = {"v": 0.5, "w": 0.0, "push": None}, {"v": 0.0, "w": 0.0, "push": None}
+    in_order = await _last_command_applied(idle_first=False)
+    assert in_order[2:5] == [go, go, go] and in_order[5:] == [stop] * len(in_order[5:])
+    assert await _last_command_applied(idle_first=True) == in_order
