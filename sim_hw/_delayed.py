@@ -112,7 +112,7 @@ class Delayed(Schedule):
             door.run_tick(self.queue.pop(need, {}))
             self.history.append((st.tick, {r: st.readings(r) for r in st.robots()}))
             self.since = {r: t for r, t in self.since.items() if t > need}
-            self._settle({r: t for r, t in self.owed.items() if t > need + 1})
+            self._settle({r: t for r, t in self.owed.items() if t > self._next()})
         if door.joins and not door.busy():
             door.admit_now()
 
@@ -126,7 +126,7 @@ class Delayed(Schedule):
         are still waited for (they may come after the call that idled it: frames and calls
         are not ordered), so that the ticks they apply at do not run on its standing command
         by the wall clock."""
-        if at > self.door.stepper.tick - self.k:
+        if at > self._next():  # (the ticks before the next to run are applied already)
             self.owed[robot] = at
 
     async def settled(self, robot: str) -> None:
@@ -134,7 +134,7 @@ class Delayed(Schedule):
         after the call that idles the robot): a robot is idle only from then on, so that the
         world is at rest at the same tick whatever the wall clock did when the last member of
         a step goes idle, and the robots wake there."""
-        if robot in self.owed:
+        if self.owed.get(robot, 0) > self._next():
             paid = self._paid.get(robot)
             if paid is None:
                 paid = self._paid[robot] = asyncio.get_running_loop().create_future()
@@ -174,6 +174,11 @@ class Delayed(Schedule):
         self._settle({r: t for r, t in self.owed.items() if r != robot})
         for commands in self.queue.values():
             commands.pop(robot, None)
+
+    def _next(self) -> int:
+        """The tick whose commands the world applies next (none before tick 0)."""
+        tick: int = self.door.stepper.tick
+        return max(tick - self.k, 0)
 
     def _waited(self, need: int) -> list[str]:
         """The robots whose command for tick ``need`` the world waits for: those not idle that

@@ -1,12 +1,13 @@
 """A team across hosts through the faults of a real network (issue 23): a run stalls and resumes,
 it is never lost, and a member known dead is still reported at once.
 
-Search and rescue (``teams/search_and_rescue.toml``, the team's patience at its default, 10 s)
-across three hosts, every process a client of one router over mutual TLS (router and world on
-a, the robots on b behind an impairment proxy, ``mover run`` on c): through a 5 s partition of b
-and a 5 s router stall it completes, with the recording of a clean run, no member lost and no
-traceback; ``mover run`` says that it waits. Under loss (10 % and 2 % at 50 ± 20 ms each way)
-``hello_team`` runs to its end (lock-step search and rescue takes minutes at that round trip);
+Search and rescue (``teams/search_and_rescue.toml``, the team's patience at its default, 10 s,
+the world's control delay 2 ticks as for teams across hosts) across three hosts, every process
+a client of one router over mutual TLS (router and world on a, the robots on b behind an
+impairment proxy, ``mover run`` on c): through a 5 s partition of b, a 5 s router stall and 10 %
+loss at 50 ± 20 ms each way it completes, with the recording of a clean run, no member lost and
+no traceback; ``mover run`` says that it waits. Under loss (10 % and 2 % at 50 ± 20 ms each way)
+``hello_team`` runs to its end too;
 processes started while the router is down say so, wait, and come up with it; a tool gives up
 after its patience in one line; a SIGKILLed robot ends the run at once, not after the patience.
 """
@@ -40,6 +41,8 @@ pytestmark = [
 
 SEED = 1
 HOSTS = ("a", "b", "c")
+CONTROL_DELAY = 2  # bench/network.py's: a 100 ms round trip in real time
+LOSSY = Impairment(0.05, 0.02, loss=0.1)  # 10 % loss at 50 ± 20 ms each way
 
 
 def rescue() -> TeamPlan:
@@ -59,29 +62,41 @@ def completed(
 
 
 async def through(fault: str | None, out: Path) -> tuple[float, bytes]:
-    """Search and rescue through ``fault`` (5 s, 3 s into the run; None: none): how long the
-    run took, its recording."""
-    async with Netlab(HOSTS) as lab, TeamAcrossHosts(lab, rescue(), out=out, seed=SEED) as team:
-        result = await team.run_with_fault(fault, timeout=120)
+    """Search and rescue at the control delay through ``fault`` (5 s, half a second into the
+    run; ``"loss"``: LOSSY throughout; None: none): how long the run took, its recording."""
+    plan = rescue()
+    assert plan.world is not None
+    plan = replace(plan, world=replace(plan.world, control_delay=CONTROL_DELAY))
+    async with Netlab(HOSTS) as lab, TeamAcrossHosts(lab, plan, out=out, seed=SEED) as team:
+        if fault == "loss":
+            assert team.proxy is not None
+            team.proxy.up = team.proxy.down = LOSSY
+        timed = None if fault == "loss" else fault
+        result = await team.run_with_fault(timed, at=0.5, timeout=150)
         lost = losses(result, team)  # before the stop, whose leaving the world logs
     completed(result, team, lost)
     waited = [line for _, line in result.lines if "waiting for" in line]
-    if fault is not None:
-        assert result.fault == f"{fault} 5 s at +3 s"
+    if timed is not None:
+        assert result.fault == f"{fault} 5 s at +0.5 s"
         assert len(waited) == 1 and "patience, 10 s" in waited[0]  # said once, while it lasted
     assert result.run_s is not None
     return result.run_s, team.recording.read_bytes()
 
 
-@pytest.mark.timeout(300)
-async def test_search_and_rescue_goes_through_a_partition_and_a_router_stall(
+@pytest.mark.timeout(420)
+async def test_search_and_rescue_goes_through_a_partition_a_router_stall_and_loss(
     tmp_path: Path,
 ) -> None:
     clean, recorded = await through(None, tmp_path / "clean")
     partition, after_partition = await through("partition", tmp_path / "partition")
     stall, after_stall = await through("stall", tmp_path / "stall")
-    assert after_partition == recorded and after_stall == recorded  # lock-step: the same run
-    print(f"run: clean {clean:.1f} s, partition 5 s {partition:.1f} s, stall 5 s {stall:.1f} s")
+    lossy, after_loss = await through("loss", tmp_path / "loss")
+    # lock-step with the same seed and control delay: the same run
+    assert after_partition == recorded and after_stall == recorded and after_loss == recorded
+    print(
+        f"run: clean {clean:.1f} s, partition 5 s {partition:.1f} s, stall 5 s {stall:.1f} s, "
+        f"10 % loss {lossy:.1f} s"
+    )
 
 
 def hello(plan: TeamPlan) -> TeamPlan:

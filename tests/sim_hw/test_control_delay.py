@@ -100,6 +100,7 @@ async def _stopped_at(first_idle: str) -> int:
     stop = {"v": 0.0, "w": 0.0, "push": None}
     for robot in (first_idle, "b" if first_idle == "a" else "a"):
         server.door.idle(robot, stop)
+        await asyncio.wait_for(server.door.settled(robot), 5)  # it owes nothing
     tick = world.tick
     await server.door.aclose()
     return tick
@@ -184,6 +185,9 @@ async def _last_command_applied(idle_first: bool) -> list[Any]:
         in_process(server, "a", {"pose": [1.0, 1.0, 0.0]}),
         in_process(server, "b", {"pose": [3.0, 3.0, 0.0]}),
     )
+    door.idle("a", {}, at=0)  # idle on its first readings: nothing owed, answered at once
+    await asyncio.wait_for(door.settled("a"), 5)
+    door.wake("a")
     go, stop = {"v": 0.5, "w": 0.0, "push": None}, {"v": 0.0, "w": 0.0, "push": None}
     for tick in range(2):
         door.hand_in("a", tick, go)
