@@ -56,7 +56,10 @@ class Node:
     A node that cannot reach its router or peers when it opens (client mode: zenoh refuses to
     open) says so in one log line and tries again, backing off (:data:`REACH_RETRY`): a member
     until the network comes up, an observer (a tool, a CLI verb) for at most its
-    ``config.patience``, then :class:`~mover.Unreachable`.
+    ``config.patience``, then :class:`~mover.Unreachable`. A member that opened (a peer opens
+    whether or not its peers answer) and has no link to anyone for :data:`REACH_SAY` seconds
+    says so, every :data:`REACH_SAY` seconds, while zenoh keeps trying, and says when it has
+    a link again.
     """
 
     def __init__(
@@ -76,6 +79,7 @@ class Node:
     ) -> None:
         self.name = _keys.check_name("robot", name)
         self.reach_hint = reach_hint  # what to check, said while the router does not answer
+        self._watch: asyncio.Task[None] | None = None  # _watch_links, while open
         self.team_config = team
         self.kind = kind
         self.config = config or NodeConfig()
@@ -147,6 +151,8 @@ class Node:
                 _keys.alive(team, "*"), portal.callback(self.membership.on_token), history=True
             )
         )
+        if self._endpoints() and not self.observer:
+            self._watch = asyncio.get_running_loop().create_task(self._watch_links())
         if self.unique:
             await self._refuse_a_taken_name()
         if not self.observer:
@@ -190,6 +196,32 @@ class Node:
                 log.warning("%s: reached %s after %.1f s", self.name, said, loop.time() - started)
             return session
 
+    async def _watch_links(self) -> None:
+        """While open: say when this node has had no link for REACH_SAY s (and every REACH_SAY
+        s after), and when it has one again."""
+        alone_since: float | None = None
+        said = 0.0
+        loop = asyncio.get_running_loop()
+        while True:
+            await asyncio.sleep(1.0)
+            now = loop.time()
+            if self.connected():
+                if said:
+                    log.warning(
+                        "%s: linked again after %.0f s", self.name, now - (alone_since or now)
+                    )
+                alone_since, said = None, 0.0
+                continue
+            if alone_since is None:
+                alone_since = now
+            if now - alone_since >= REACH_SAY and now - said >= REACH_SAY:
+                said = now
+                hint = f"; {self.reach_hint}" if self.reach_hint else ""
+                log.warning(
+                    "%s: no link to %s (%.0f s): zenoh keeps trying%s",
+                    self.name, ", ".join(self._endpoints()), now - alone_since, hint,
+                )  # fmt: skip
+
     def _endpoints(self) -> list[str]:
         """The endpoints this node connects to (its settings, or its zenoh config file's)."""
         given = self.config.overrides.get("connect/endpoints", self.config.connect)
@@ -229,6 +261,9 @@ class Node:
         """Leave the team: cancel served calls, fail pending ones, close the session."""
         if not self._state.is_open:
             return
+        if self._watch is not None:
+            self._watch.cancel()
+            self._watch = None
         self._pubsub.flush()
         await self._server.close()
         self._client.close()

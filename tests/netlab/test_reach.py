@@ -12,6 +12,7 @@ import pytest
 
 from mover import Node, NodeConfig, TeamCredentials, Unreachable
 from mover._config import free_port
+from mover._node import REACH_SAY
 from tests.helpers.procs import ROOT
 
 pytestmark = pytest.mark.processes  # the router of the last test
@@ -61,3 +62,25 @@ async def test_a_member_waits_for_its_router_and_comes_up_with_it(
     assert len([s for s in said if "cannot reach" in s]) == 1
     assert "trying again until it answers" in said[0]
     assert any(s.startswith("m: reached tcp/127.0.0.1:") for s in said)
+
+
+async def test_a_peer_alone_says_so_every_few_seconds_and_when_it_has_a_link(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """A peer opens whether or not the peer it connects to answers: it says after REACH_SAY s
+    that it has no link (naming the endpoint), and once the other peer is up that it has one."""
+    caplog.set_level(logging.WARNING, "mover.node")
+    team = TeamCredentials.generate("reach")
+    where = f"tcp/127.0.0.1:{free_port()}"
+    async with Node("p", team, config=NodeConfig(listen=(), connect=(where,))) as alone:
+        await asyncio.sleep(REACH_SAY + 1.5)
+        said = [r.getMessage() for r in caplog.records if r.name == "mover.node"]
+        assert [s for s in said if s.startswith(f"p: no link to {where}")], said
+        async with Node("q", team, config=NodeConfig(listen=(where,))):
+            for _ in range(40):
+                if alone.connected():
+                    break
+                await asyncio.sleep(0.25)
+            await asyncio.sleep(1.5)  # the watch looks once a second
+    said = [r.getMessage() for r in caplog.records if r.name == "mover.node"]
+    assert any(s.startswith("p: linked again after") for s in said), said
