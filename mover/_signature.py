@@ -10,12 +10,11 @@ so the checks are structural: ``int`` (not bool), ``float`` (an int is accepted 
 from __future__ import annotations
 
 import inspect
+import sys
 import types
 import typing
 from collections.abc import Callable
 from typing import Any
-
-import numpy as np
 
 Check = Callable[[Any], Any]  # returns the (possibly converted) value or raises TypeError
 
@@ -55,7 +54,8 @@ def compile_check(hint: Any) -> Check | None:
         return _check_int
     if hint is float:
         return _check_float
-    if hint is np.ndarray:
+    np = sys.modules.get("numpy")  # a hint naming numpy's array was written with numpy imported
+    if np is not None and hint is np.ndarray:
         return _simple(np.ndarray)
     origin = typing.get_origin(hint)
     args = typing.get_args(hint)

@@ -36,12 +36,12 @@ from __future__ import annotations
 
 import os
 import struct
+import sys
 import time
 from dataclasses import dataclass
 from typing import Any
 
 import msgpack
-import numpy as np
 from cryptography.exceptions import InvalidTag
 from cryptography.hazmat.primitives import hashes
 from cryptography.hazmat.primitives.ciphers.aead import AESGCM
@@ -61,13 +61,14 @@ _NUMERIC_KINDS = frozenset("biufc")
 
 
 def _default(obj: object) -> Any:
-    if isinstance(obj, np.ndarray):
+    np = sys.modules.get("numpy")  # imported only by who has arrays to send (a lean process)
+    if np is not None and isinstance(obj, np.ndarray):
         if obj.dtype.kind not in _NUMERIC_KINDS:
             raise WireError(f"cannot send a numpy array of dtype {obj.dtype}")
         dtype = obj.dtype.str.encode("ascii")
         head = struct.pack(f"<B{len(dtype)}sB{obj.ndim}Q", len(dtype), dtype, obj.ndim, *obj.shape)
         return msgpack.ExtType(NDARRAY_EXT, head + np.ascontiguousarray(obj).tobytes())
-    if isinstance(obj, np.generic):
+    if np is not None and isinstance(obj, np.generic):
         return obj.item()
     if isinstance(obj, (set, frozenset)):
         return sorted(obj)
@@ -77,6 +78,8 @@ def _default(obj: object) -> Any:
 def _ext_hook(code: int, data: bytes) -> Any:
     if code != NDARRAY_EXT:
         raise WireError(f"unknown extension type {code}")
+    import numpy as np  # an array came: numpy is needed now (not before: see _default)
+
     n = data[0]
     dtype = np.dtype(data[1 : 1 + n].decode("ascii"))
     if dtype.kind not in _NUMERIC_KINDS:

@@ -19,29 +19,36 @@ Public face (everything else is private and may change):
 * the world process — :func:`serve_world` (exports the world over zenoh).
 """
 
-from sim_hw._lockstep import RobotDropped
+from __future__ import annotations
 
-from ._ceiling import Below, Ceiling
-from ._generate import corridor_paths, double_corridor, free_points, random_obstacles
-from ._hardware import SimHardware, in_process, remote
-from ._kinds import eyebot_in_process, footbot_in_process
-from ._record import Recorder, plot_recording, read_recording
-from ._spec import (
-    AreaSpec,
-    BoxSpec,
-    CameraSpec,
-    EyeBotSpec,
-    ImmovableSpec,
-    MarkerSpec,
-    ObstacleSpec,
-    OdometrySpec,
-    RobotSpec,
-    SonarSpec,
-    WorldSpec,
-)
-from ._stepper import WorldServer, serve_world
-from ._world import DT, STEPS_PER_TICK, TICK, World
-from ._worldfile import WorldFileError, load_world, parse_robot, parse_world
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:  # the type checker sees them all; at run time each is imported when used
+    from sim_hw._lockstep import RobotDropped
+
+    from ._ceiling import Below, Ceiling
+    from ._contract import DT, STEPS_PER_TICK, TICK
+    from ._generate import corridor_paths, double_corridor, free_points, random_obstacles
+    from ._hardware import SimHardware, in_process, remote
+    from ._kinds import eyebot_in_process, footbot_in_process
+    from ._record import Recorder, plot_recording, read_recording
+    from ._spec import (
+        AreaSpec,
+        BoxSpec,
+        CameraSpec,
+        EyeBotSpec,
+        ImmovableSpec,
+        MarkerSpec,
+        ObstacleSpec,
+        OdometrySpec,
+        RobotSpec,
+        SonarSpec,
+        WorldSpec,
+    )
+    from ._stepper import WorldServer, serve_world
+    from ._world import World
+    from ._worldfile import WorldFileError, load_world, parse_robot, parse_world
 
 __all__ = [
     "DT",
@@ -81,3 +88,57 @@ __all__ = [
     "remote",
     "serve_world",
 ]
+
+#: Where each public name lives: a robot process that imports only its backend does not load
+#: the world (pymunk) nor numpy through this package (issue 25's leaner robot processes).
+_WHERE = {
+    "Below": "._ceiling",
+    "Ceiling": "._ceiling",
+    "corridor_paths": "._generate",
+    "double_corridor": "._generate",
+    "free_points": "._generate",
+    "random_obstacles": "._generate",
+    "SimHardware": "._hardware",
+    "in_process": "._hardware",
+    "remote": "._hardware",
+    "eyebot_in_process": "._kinds",
+    "footbot_in_process": "._kinds",
+    "Recorder": "._record",
+    "plot_recording": "._record",
+    "read_recording": "._record",
+    "AreaSpec": "._spec",
+    "BoxSpec": "._spec",
+    "CameraSpec": "._spec",
+    "EyeBotSpec": "._spec",
+    "ImmovableSpec": "._spec",
+    "MarkerSpec": "._spec",
+    "ObstacleSpec": "._spec",
+    "OdometrySpec": "._spec",
+    "RobotSpec": "._spec",
+    "SonarSpec": "._spec",
+    "WorldSpec": "._spec",
+    "WorldServer": "._stepper",
+    "serve_world": "._stepper",
+    "DT": "._contract",
+    "STEPS_PER_TICK": "._contract",
+    "TICK": "._contract",
+    "World": "._world",
+    "WorldFileError": "._worldfile",
+    "load_world": "._worldfile",
+    "parse_robot": "._worldfile",
+    "parse_world": "._worldfile",
+    "RobotDropped": "sim_hw._lockstep",
+}
+
+
+def __getattr__(name: str) -> Any:
+    where = _WHERE.get(name)
+    if where is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(where, __name__), name)
+    globals()[name] = value  # once
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*__all__, *(n for n in globals() if n.startswith("_"))})

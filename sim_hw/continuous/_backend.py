@@ -27,9 +27,9 @@ from robots.stigmergic import (
     footbot_procedures,
 )
 
+from ._contract import EYEBOT, FOOTBOT
 from ._hardware import remote
 from ._kinds import join_remote
-from ._skyworld import EYEBOT, FOOTBOT
 
 if TYPE_CHECKING:
     from mover import Node

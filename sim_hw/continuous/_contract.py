@@ -11,6 +11,15 @@ from typing import Any, TypedDict
 
 from robots.hal import BumperSide
 
+DT = 1.0 / 60.0
+"""Seconds of one physics step."""
+STEPS_PER_TICK = 6
+"""Physics steps in one control tick."""
+TICK = DT * STEPS_PER_TICK
+"""Seconds of one control tick (a robot's command and readings)."""
+EYEBOT, FOOTBOT = "eyebot", "footbot"
+"""The two kinds a join's settings may name (``{"kind": ...}``)."""
+
 
 class Command(TypedDict, total=False):
     """A robot's command for the next tick; a missing key keeps its last value."""

@@ -30,8 +30,7 @@ from sim_hw import _link
 from sim_hw._link import WorldLink
 from sim_hw._ticks import Ticks
 
-from ._contract import Command, Readings
-from ._world import TICK
+from ._contract import TICK, Command, Readings
 
 if TYPE_CHECKING:
     from mover import Node

@@ -18,9 +18,8 @@ from robots.hal import Sonar
 from robots.stigmergic import EyeBotHardware, FootBotHardware, Goal, Heard, Instruction, Spot
 from sim_hw import _link
 
-from ._contract import Command
+from ._contract import EYEBOT, FOOTBOT, Command
 from ._hardware import SimHardware, _Clock, _Drive, _Led, _Odometry, _Radio, _Sonar
-from ._skyworld import EYEBOT, FOOTBOT
 
 if TYPE_CHECKING:
     from mover import Node

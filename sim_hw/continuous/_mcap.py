@@ -25,8 +25,8 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from ._contract import TICK
 from ._ros2_msgs import msgdef
-from ._world import TICK
 
 FRAME = "world"
 _CUBE, _CYLINDER, _LINE_STRIP, _LINE_LIST = 1, 3, 4, 5

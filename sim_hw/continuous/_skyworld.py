@@ -26,15 +26,12 @@ from collections.abc import Collection, Mapping
 from typing import Any
 
 from ._ceiling import Ceiling
-from ._contract import EyeReadings, FootReadings
+from ._contract import EYEBOT, FOOTBOT, EyeReadings, FootReadings
 from ._spec import RobotSpec
 from ._stepper import WorldStepper
 from ._world import World
 
 log = logging.getLogger("sim_hw.continuous")
-
-EYEBOT, FOOTBOT = "eyebot", "footbot"
-"""The two kinds a join's settings may name (``{"kind": ...}``)."""
 
 
 class SkyStepper(WorldStepper):

@@ -21,8 +21,9 @@ from mover import Node
 from sim_hw._lockstep import Command, LockstepDoor, Readings
 from sim_hw._process import STATE_TOPIC, serve
 
+from ._contract import TICK
 from ._spec import RobotSpec
-from ._world import TICK, World
+from ._world import World
 from ._worldfile import parse_robot
 
 log = logging.getLogger("sim_hw.continuous")

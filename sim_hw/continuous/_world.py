@@ -22,7 +22,7 @@ from pymunk._chipmunk import lib as _lib
 from robots.hal import MARK, MARKED
 
 from . import _bodies, _devices
-from ._contract import Command, Readings
+from ._contract import DT, STEPS_PER_TICK, TICK, Command, Readings
 from ._sonar import Discs, Sonar, sonar_batch
 from ._spec import RobotSpec, WorldSpec
 
@@ -30,9 +30,6 @@ _T = TypeVar("_T")
 
 log = logging.getLogger("sim_hw.world")
 
-DT = 1.0 / 60.0
-STEPS_PER_TICK = 6
-TICK = DT * STEPS_PER_TICK
 BATCH_FROM = 64
 """Robots from which a tick's sonar is read in one batch (``_sonar``; measured: docs/physics.md)."""
 PUSH_REACH = 0.1

@@ -71,7 +71,8 @@ def run_world(args: argparse.Namespace) -> int:
     from sim_hw._process import run_world_process
 
     from . import Recorder, WorldFileError, WorldServer, load_world, serve_world
-    from ._world import TICK, World
+    from ._contract import TICK
+    from ._world import World
 
     try:
         spec = load_world(args.worldfile)

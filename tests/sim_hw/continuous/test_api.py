@@ -52,3 +52,8 @@ async def test_devices_can_be_left_out() -> None:
     hw = await in_process(server, "r", {"sonar": False, "camera": False, "radio": False})
     assert (hw.sonar, hw.camera, hw.radio) == (None, None, None)
     await server.door.aclose()
+
+
+def test_a_robot_s_backend_loads_no_world() -> None:
+    """A robot process joins a world process: its backend needs neither pymunk nor the world."""
+    assert loaded_roots("sim_hw.continuous._backend", ("pymunk", "matplotlib")) == "[]"
