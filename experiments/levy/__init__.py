@@ -14,15 +14,17 @@ index, the same arenas for every method. Per-point runs are saved as JSON lines 
 (``--save``), so a later run adds trials.
 """
 
+from ._checks import cauchy_steps, checks_report, step_stats, step_table
 from ._cli import register, run, settings
 from ._paper import ALPHAS, FIG8_TARGETS, FIG9_ROBOTS, ORDER, Setup
 from ._report import paired, saturation, table, theory
 from ._settings import LevySettings, Point
-from ._sweep import SWEEPS, points, run_points
+from ._sweep import CHECKS, SWEEPS, points, run_points
 from ._trial import arena, heard, run_trial, run_world, world_data
 
 __all__ = [
     "ALPHAS",
+    "CHECKS",
     "FIG8_TARGETS",
     "FIG9_ROBOTS",
     "ORDER",
@@ -31,6 +33,8 @@ __all__ = [
     "Point",
     "Setup",
     "arena",
+    "cauchy_steps",
+    "checks_report",
     "heard",
     "paired",
     "points",
@@ -41,6 +45,8 @@ __all__ = [
     "run_world",
     "saturation",
     "settings",
+    "step_stats",
+    "step_table",
     "table",
     "theory",
     "world_data",
