@@ -8,10 +8,13 @@ inverse-square law) and L+P (Lévy walk, the robots' mutual repulsion of eq. 9 f
 hear by range-limited broadcast, and found targets' signatures repelling within 3 m) — until
 every target is marked; the search time is when the last one was. Sweeps: ``fig8`` (search
 time vs targets, 10 robots), ``fig9`` (vs robots, 8 targets) and ``alpha`` (vs α for L and
-L+P, held against the theory's prediction for destructive search). Runs go to a pool of
-worker processes; every run's seeds derive from the master seed (printed) and the run
-index, the same arenas for every method. Per-point runs are saved as JSON lines and read back
-(``--save``), so a later run adds trials.
+L+P, held against the theory's prediction for destructive search); beyond the paper, at 8
+targets and 10, 20, 30 robots: ``step`` (FL at steps of 0.5-6 m against L and L+P: does
+L < FL rest on FL's step?), ``parts`` (L+P taken apart: L+F the field among robots only, L+S
+the signatures only) and ``fig4`` (signatures on every walk, FL+S beside L+S and L+P, as the
+paper's Fig. 4 controller reads). Runs go to a pool of worker processes; every run's seeds
+derive from the master seed (printed) and the run index, the same arenas for every method.
+Per-point runs are saved as JSON lines and read back (``--save``), so a later run adds trials.
 """
 
 from ._checks import cauchy_steps, checks_report, step_stats, step_table
