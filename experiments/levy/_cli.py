@@ -9,7 +9,7 @@ import time
 from dataclasses import replace
 
 from mover.cli import UsageError
-from robots.library import METHODS, LevyParams
+from robots.library import METHODS, WALKS, LevyParams
 
 from .._common import (
     add_list_arguments,
@@ -21,10 +21,20 @@ from .._common import (
 )
 from .._figures import add_figure_arguments
 from .._saved import add_saved_arguments
-from ._paper import ALPHA_TARGETS, ALPHAS, FIG8_TARGETS, FIG9_ROBOTS, Setup
+from ._checks import checks_report
+from ._paper import (
+    ALPHA_TARGETS,
+    ALPHAS,
+    CHECK_ROBOTS,
+    FIG8_TARGETS,
+    FIG9_ROBOTS,
+    ORDER,
+    STEPS,
+    Setup,
+)
 from ._report import paired, saturation, speed, table, theory
 from ._settings import LevySettings
-from ._sweep import SWEEPS, points, run_points
+from ._sweep import CHECKS, SWEEPS, points, run_points
 
 MAX_TIME = 1e6
 """The longest censoring time a run may be given (simulated s)."""
@@ -49,12 +59,21 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "--sweep",
         type=comma_list(str, SWEEPS),
         default=["fig8", "fig9"],
-        help="comma list of fig8, fig9, alpha (default fig8,fig9)",
+        help="comma list of fig8, fig9, alpha, and beyond the paper at 8 targets and"
+        " --check-robots: step (FL at each of --steps against L and L+P), parts (L, L+F: field"
+        " only, L+S: signatures only, L+P) and fig4 (signatures on every walk: FL, FL+S, L,"
+        " L+S, L+P) (default fig8,fig9)",
     )
     add_run_arguments(parser, runs=50, seed=None, workers=2)
     add_list_arguments(
         parser,
-        ("--methods", comma_list(str, METHODS), METHODS, "comma list of FL, L, L+P"),
+        (
+            "--methods",
+            comma_list(str, tuple(WALKS)),
+            METHODS,
+            "fig8, fig9, alpha: comma list of FL, L, L+P, or the parts L+F, L+S, FL+S"
+            " (default FL,L,L+P)",
+        ),
         (
             "--targets",
             comma_list(int),
@@ -67,6 +86,13 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
             comma_list(float),
             ALPHAS,
             f"stable indices of the alpha sweep {shown(ALPHAS)}",
+        ),
+        ("--steps", comma_list(float), STEPS, f"the step sweep's FL steps (m) {shown(STEPS)}"),
+        (
+            "--check-robots",
+            comma_list(int),
+            CHECK_ROBOTS,
+            f"robot counts of the step, parts and fig4 sweeps {shown(CHECK_ROBOTS)}",
         ),
     )
     parser.add_argument("--alpha", type=float, default=Setup.alpha, help="the walks' α (1)")
@@ -96,10 +122,13 @@ def settings(args: argparse.Namespace) -> LevySettings:
     """The settings the command line asks for, checked. Raises
     :class:`~mover.cli.UsageError` naming what is wrong."""
     given = read_run_arguments(args)
-    if min(args.targets) < 1 or min(args.robots) < 1:
-        raise UsageError("--targets and --robots must be positive")
-    if max(args.targets) > 1000 or max(args.robots) > 1000:
-        raise UsageError("--targets and --robots must be at most 1000")
+    counts = (*args.targets, *args.robots, *args.check_robots)
+    if min(counts) < 1:
+        raise UsageError("--targets, --robots and --check-robots must be positive")
+    if max(counts) > 1000:
+        raise UsageError("--targets, --robots and --check-robots must be at most 1000")
+    if not all(math.isfinite(f) and 0 < f <= 1000 for f in args.steps):
+        raise UsageError("--steps must be positive, at most 1000 m")
     if not all(0 < a <= 2 for a in [*args.alphas, args.alpha]):
         raise UsageError("--alpha and --alphas must be in (0, 2]")
     numbers = (args.max_time, args.scale, args.fixed, args.rho0, args.signature_range)
@@ -128,6 +157,8 @@ def settings(args: argparse.Namespace) -> LevySettings:
         targets=tuple(args.targets),
         robots=tuple(args.robots),
         alphas=tuple(args.alphas),
+        steps=tuple(args.steps),
+        check_robots=tuple(args.check_robots),
         workers=given.workers,
         executor=args.executor,
         setup=setup,
@@ -152,8 +183,12 @@ def run(args: argparse.Namespace) -> int:
         t0 = time.monotonic()
         records, fresh, wall = run_points(s, points(s, sweep), sweep)
         everything.extend(records)
-        print(table(records, _KEYS[sweep], _TITLES[sweep], s.setup))
-        print(paired(records, _KEYS[sweep], s.setup))
+        if sweep in CHECKS:
+            print(checks_report(sweep, records, s.setup, CHECKS[sweep]))
+        else:
+            cols = None if set(s.methods) <= set(ORDER) else s.methods
+            print(table(records, _KEYS[sweep], _TITLES[sweep], s.setup, cols))
+            print(paired(records, _KEYS[sweep], s.setup))
         if sweep == "fig9":
             print(saturation(records, s.setup))
         if sweep == "alpha":
@@ -161,7 +196,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"{sweep}: {len(fresh)} runs made in {time.monotonic() - t0:.0f} s wall")
         if fresh:
             print(speed(fresh, wall))
-        if s.out is not None:
+        if s.out is not None and sweep not in CHECKS:  # tables only beyond the figures
             from ._plots import plot
 
             print(f"wrote {plot(sweep, records, s.setup, s.out, s.format)}")

@@ -24,6 +24,12 @@ FIG9_TARGETS = 8
 ALPHAS = (0.5, 0.75, 1.0, 1.25, 1.5, 2.0)
 ALPHA_ROBOTS = 10
 ALPHA_TARGETS = 8
+#: Beyond the paper, 8 targets: the fixed walk's step (m) against L and L+P (``step``), L+P
+#: taken apart (``parts``: L, L+F, L+S, L+P) and signatures on every walk (``fig4``: FL, FL+S,
+#: L, L+S, L+P), at these robot counts.
+STEPS = (0.5, 1.0, 1.5, 2.0, 2.5, 4.0, 6.0)
+CHECK_ROBOTS = (10, 20, 30)
+CHECK_TARGETS = 8
 #: The paper's ordering of the mean search times at every point of Fig. 8-9.
 ORDER = ("L+P", "L", "FL")
 

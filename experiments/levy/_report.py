@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 from collections import defaultdict
+from collections.abc import Sequence
 from typing import Any
 
 from robots.library import stable_alpha, viswanathan_mu
@@ -37,18 +38,26 @@ def _cell(recs: Records, cap: float) -> str:
     return f"{s.mean:7.1f} ±{s.sd:6.1f} ({s.se:5.1f}){mark:>3}"
 
 
-def table(records: Records, key: str, title: str, setup: Setup) -> str:
+def table(
+    records: Records,
+    key: str,
+    title: str,
+    setup: Setup,
+    methods: Sequence[str] | None = None,
+) -> str:
     """Mean ± sd (se) of the search time (s) against ``key`` (``targets``, ``robots`` or
-    ``alpha``), one column per method, and whether the paper's ordering holds at each row."""
+    ``alpha``), one column per method, and whether the paper's ordering holds at each row
+    (``methods``: these columns instead of the paper's three, and no ordering)."""
     groups = _by(records, key)
-    methods = [m for m in ORDER if any(r["method"] == m for r in records)]
+    ours = methods is not None
+    methods = [m for m in (methods or ORDER) if any(r["method"] == m for r in records)]
     xs = sorted({r[key] for r in records})
     out = [f"\n{title}", f"{key:>7} " + "".join(f"{m + ' mean ±sd (se)':>25}" for m in methods)]
-    if key != "alpha":
+    if key != "alpha" and not ours:
         out[-1] += "   measured order   paper"
     for x in xs:
         row = f"{x:>7g} " + "".join(f" {_cell(groups[(x, m)], setup.max_time)}" for m in methods)
-        if key != "alpha":
+        if key != "alpha" and not ours:
             means = {m: summary(times(groups[(x, m)], setup.max_time)).mean for m in methods}
             order = " < ".join(sorted(means, key=lambda m: means[m]))
             row += f"   {order:<16} {' < '.join(ORDER)}"
@@ -118,14 +127,20 @@ def speed(records: Records, wall: float) -> str:
     return f"speed: {per_core:.0f} simulated robot-seconds per wall second a worker{overall}"
 
 
-def paired(records: Records, key: str, setup: Setup) -> str:
+def paired(
+    records: Records,
+    key: str,
+    setup: Setup,
+    pairs: Sequence[tuple[str, str]] = (("L+P", "L"), ("L", "FL")),
+) -> str:
     """The methods' differences paired by run (the same arena, targets and starts): mean ±
-    se of L+P - L and L - FL at each ``key``, and how many runs each pair shares."""
+    se of each of ``pairs`` (a - b; L+P - L and L - FL unless told) at each ``key``, and how
+    many runs each pair shares."""
     by: dict[tuple[Any, str, int], float] = {}
     for r, t in zip(records, times(records, setup.max_time), strict=True):
         by[(r[key], r["method"], r["run"])] = t
     xs = sorted({r[key] for r in records})
-    pairs = [(a, b) for a, b in (("L+P", "L"), ("L", "FL")) if any(k[1] == a for k in by)]
+    pairs = [(a, b) for a, b in pairs if any(k[1] == a for k in by)]
     pairs = [(a, b) for a, b in pairs if any(k[1] == b for k in by)]
     if not pairs:
         return ""

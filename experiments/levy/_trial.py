@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 
 from robots.hal import Sighting
-from robots.library import MARK, Neighbour, levy_sense, walker
+from robots.library import MARK, WALKS, Neighbour, levy_sense, walker
 from sim_hw.continuous import (
     TICK,
     CameraSpec,
@@ -42,7 +42,8 @@ from sim_hw.continuous import (
 
 from ._paper import Setup
 
-METHOD_CODES = {"FL": 0, "L": 1, "L+P": 2}
+METHOD_CODES = {"FL": 0, "L": 1, "L+P": 2, "L+F": 3, "L+S": 4, "FL+S": 5}
+"""Each walk's part of its robots' seeds (the arenas do not depend on it)."""
 
 
 def seeds(master: int, run: int, robots: int, targets: int) -> dict[str, np.random.SeedSequence]:
@@ -154,6 +155,7 @@ def run_world(
         "robots": len(ids),
         "targets": targets,
         "alpha": setup.alpha,
+        "fixed": None if WALKS[method][0] else setup.fixed,
         "time": found[-1] if done and found else None,
         "found": found,
         "sim_s": world.time - start,

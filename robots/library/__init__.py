@@ -12,8 +12,8 @@ function or small class of readings → command, testable without a world.
 * manipulation — :func:`pusher`, :func:`steerer`, :class:`Path`, :func:`stations`,
   :func:`pusher_command`, :func:`steerer_command`, :func:`object_pose`;
 * Lévy search (Sutantyo et al.) — :class:`LevyWalker` (eq. 10, Fig. 4), :func:`walker` and
-  :data:`METHODS` (FL, L, L+P), :func:`levy_search`, :func:`repulsion` (eq. 9),
-  :func:`mantegna` (eq. 11-12), :class:`LevySteps`, :class:`FixedSteps`,
+  :data:`METHODS` (FL, L, L+P; :data:`WALKS` with their parts), :func:`levy_search`,
+  :func:`repulsion` (eq. 9), :func:`mantegna` (eq. 11-12), :class:`LevySteps`, :class:`FixedSteps`,
   :func:`viswanathan_mu` (eq. 4-5), :func:`stable_alpha`, :func:`mean_flights` (eq. 3);
 * training (section 5) — :func:`snapshot`.
 """
@@ -35,6 +35,7 @@ from ._goto import (
 )
 from ._levy import (
     METHODS,
+    WALKS,
     LevyCommand,
     LevyParams,
     LevySense,
@@ -84,6 +85,7 @@ __all__ = [
     "MARK",
     "MARKED",
     "METHODS",
+    "WALKS",
     "FixedSteps",
     "Found",
     "LevyCommand",

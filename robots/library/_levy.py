@@ -17,7 +17,8 @@ walk, :class:`~robots.library.FixedSteps` for the fixed-length one) and *turn* p
   with ``signatures``, marked targets seen within the signature range repel like robots do,
   so that robots leave found targets to search elsewhere.
 
-:data:`METHODS` names the paper's three walks (FL, L, L+P); :func:`walker` builds one, and
+:data:`METHODS` names the paper's three walks (FL, L, L+P), :data:`WALKS` those and their parts
+(L+F, L+S, FL+S: the field or the signatures alone); :func:`walker` builds one, and
 :func:`levy_search` runs one on a robot's HAL.
 """
 
@@ -39,6 +40,19 @@ from ._levy_steps import FixedSteps, LevySteps
 METHODS = ("FL", "L", "L+P")
 """The paper's walks: fixed-length (FL), Lévy (L), Lévy with potential field and signatures
 (L+P)."""
+
+WALKS: dict[str, tuple[bool, bool, bool]] = {
+    "FL": (False, False, False),
+    "L": (True, False, False),
+    "L+P": (True, True, True),
+    "L+F": (True, True, False),
+    "L+S": (True, False, True),
+    "FL+S": (False, False, True),
+}
+"""Every walk :func:`walker` builds, as (Lévy steps, ``field``, ``signatures``): the paper's
+three, and L+P taken apart — L+F (the robots' mutual repulsion alone), L+S (the found
+targets' signatures alone) — and FL+S (the fixed-length walk with signatures: with L+S and
+L+P, the reading of Fig. 4, whose controller leaves a signature on every walk's finds)."""
 
 _EPS = 1e-9  # metres or seconds: a phase that has this little left is over
 RETRY = 10
@@ -276,17 +290,15 @@ def walker(
     fixed: float = 1.0,
     params: LevyParams | None = None,
 ) -> LevyWalker:
-    """One of the paper's walks by name (:data:`METHODS`): ``FL`` steps of ``fixed`` m; ``L``
-    Lévy steps of stable index ``alpha``, ``scale`` m a unit, at most ``cap`` m; ``L+P`` the
-    same with the field among robots and the targets' signatures switched on."""
-    if method not in METHODS:
-        raise ValueError(f"unknown method {method!r}; choose from {', '.join(METHODS)}")
-    base = params or LevyParams()
-    on = method == "L+P"
-    base = replace(base, field=on, signatures=on)
-    steps: Steps = (
-        FixedSteps(fixed) if method == "FL" else LevySteps(rng, alpha=alpha, scale=scale, cap=cap)
-    )
+    """A walk by name (:data:`WALKS`): ``FL`` steps of ``fixed`` m; ``L`` Lévy steps of
+    stable index ``alpha``, ``scale`` m a unit, at most ``cap`` m; ``L+P`` the same with the
+    field among robots and the targets' signatures switched on; ``L+F``, ``L+S`` and ``FL+S``
+    with the field only, the signatures only, and FL with the signatures."""
+    if method not in WALKS:
+        raise ValueError(f"unknown method {method!r}; choose from {', '.join(WALKS)}")
+    levy, on_field, on_signatures = WALKS[method]
+    base = replace(params or LevyParams(), field=on_field, signatures=on_signatures)
+    steps: Steps = LevySteps(rng, alpha=alpha, scale=scale, cap=cap) if levy else FixedSteps(fixed)
     return LevyWalker(steps, rng, base)
 
 

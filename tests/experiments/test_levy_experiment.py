@@ -14,11 +14,15 @@ import pytest
 from experiments.levy import (
     Setup,
     arena,
+    cauchy_steps,
     paired,
+    points,
     register,
     run_trial,
     run_world,
     settings,
+    step_stats,
+    step_table,
     table,
     theory,
     world_data,
@@ -140,6 +144,8 @@ def test_table_and_theory_by_hand() -> None:
         ("--max-time", "-1"),
         ("--rho0", "0"),
         ("--k-rep", "-1"),
+        ("--steps", "0"),
+        ("--check-robots", "0"),
     ],
 )
 def test_usage_errors(argv: tuple[str, ...]) -> None:
@@ -155,3 +161,58 @@ def test_runs_of_other_settings_are_saved_apart(tmp_path: Path) -> None:
     assert s.setup.walk.rho0 == 3.0 and s.setup.walk.k_sig == 20.0
     plain = settings(_parse("--save", str(tmp_path / "runs"), "--alpha", "1.5"))
     assert plain.save == tmp_path / "runs" and plain.setup.tag() == ""
+
+
+def test_the_capped_mean_step_measured_from_the_generator_is_the_closed_form() -> None:
+    median, mean = cauchy_steps(1.0, 20.0)
+    assert median == 1.0 and mean == pytest.approx(2.5440, abs=1e-4)
+    got = step_stats(Setup(), draws=100_000, seed=1)
+    assert got[0] == pytest.approx(1.0, abs=0.03) and got[1] == pytest.approx(mean, abs=0.05)
+    assert cauchy_steps(2.0, 40.0) == pytest.approx((2.0, 2 * mean))
+
+
+def test_the_step_table_pairs_fl_at_each_step_with_l_by_hand() -> None:
+    rec = [
+        {"method": m, "robots": 10, "targets": 8, "alpha": 1.0, "fixed": f, "run": k, "time": t}
+        for m, f, k, t in (
+            ("L", None, 0, 100.0),
+            ("L", None, 1, 110.0),
+            ("L", None, 2, 90.0),
+            ("FL", 1.0, 0, 200.0),
+            ("FL", 1.0, 1, 205.0),
+            ("FL", 1.0, 2, 195.0),
+            ("FL", 2.5, 0, 95.0),
+            ("FL", 2.5, 1, 120.0),
+            ("FL", 2.5, 2, 80.0),
+        )
+    ]
+    text = step_table(rec, Setup())
+    assert "-100.0 ±  2.9 (n   3)" in text  # L - FL(1 m): -100, -95, -105
+    assert "1 m L < FL, 2.5 m L ≈ FL" in text
+
+
+def test_the_checks_sweeps_name_their_points_and_keep_the_default_fl_point() -> None:
+    s = settings(_parse("--steps", "1,2.5", "--check-robots", "10", "--no-save"))
+    names = [p.name for p in points(s, "step")]
+    assert names == ["L_r10_t8_a1", "L+P_r10_t8_a1", "FL_r10_t8_a1", "FL_r10_t8_a1_f2.5"]
+    assert [p.method for p in points(s, "parts")] == ["L", "L+F", "L+S", "L+P"]
+    assert [p.method for p in points(s, "fig4")] == ["FL", "FL+S", "L", "L+S", "L+P"]
+
+
+def test_the_checks_sweeps_run_save_and_tabulate(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    save = tmp_path / "runs"
+    args = _parse(
+        "--seed", "5", "--sweep", "step,parts,fig4", "--check-robots", "3", "--steps", "2.5",
+        "--runs", "2", "--max-time", "30", "--save", str(save), "--workers", "1", "--quiet",
+    )  # fmt: skip
+    assert args.func(args) == 0
+    out = capsys.readouterr()[0]
+    assert "mean 2.54" in out and "closed form" in out
+    assert "L+P - L+F - L+S + L" in out and "FL+S - FL" in out
+    files = sorted(p.name for p in save.iterdir())
+    assert "FL_r3_t8_a1_f2.5.jsonl" in files and "FL+S_r3_t8_a1.jsonl" in files
+    assert "L+F_r3_t8_a1.jsonl" in files and "L+S_r3_t8_a1.jsonl" in files
+    line = json.loads((save / "FL_r3_t8_a1_f2.5.jsonl").read_text().splitlines()[0])
+    assert line["fixed"] == 2.5 and line["method"] == "FL"

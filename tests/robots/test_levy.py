@@ -179,6 +179,23 @@ def test_an_obstacle_ahead_ends_the_step_and_the_robot_turns_to_the_free_side() 
     assert w.step(sense()).state == "move" and w.phases == first + 1  # a new step
 
 
+def test_the_parts_of_l_p_each_react_to_one_thing_only() -> None:
+    robot = sense(neighbours=((1.0, -0.5),))  # a robot on the right
+    found = sense(targets=(target(2.0, 0.3, MARKED),))  # someone's find on the left
+    for method, to_robot, to_find in (
+        ("L+F", True, False),
+        ("L+S", False, True),
+        ("FL+S", False, True),
+        ("L+P", True, True),
+    ):
+        assert (walker(method, np.random.default_rng(1)).step(robot).w > 0) is to_robot, method
+        assert (walker(method, np.random.default_rng(1)).step(found).w < 0) is to_find, method
+    # FL+S keeps the fixed steps, L+S the Lévy ones
+    fls = walker("FL+S", np.random.default_rng(1), fixed=1.0)
+    assert isinstance(fls.steps, FixedSteps) and fls.steps.length == 1.0
+    assert isinstance(walker("L+S", np.random.default_rng(1)).steps, LevySteps)
+
+
 def test_unknown_methods_are_refused() -> None:
     with pytest.raises(ValueError, match="unknown method"):
         walker("brownian", np.random.default_rng(0))
