@@ -163,6 +163,11 @@ def run_replay(args: argparse.Namespace) -> int:
 
             return replay(args.file, port=args.port, bind=args.bind, rrd=out)
         else:
+            if Path(args.file).suffix == ".mcap":
+                from ._mcap import recording_kind
+
+                if recording_kind(args.file) == "grid":
+                    raise UsageError(f"{args.file}: a grid recording plays in the viewer only")
             plot_recording(args.file, out)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
