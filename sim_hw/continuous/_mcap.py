@@ -9,6 +9,8 @@ Topics (frame ``world``; stamps and log times in simulated time, t = 0 at the ru
 * ``/ROBOT/cmd_vel`` ``geometry_msgs/msg/TwistStamped`` — the drive command in force;
 * ``/ROBOT/sonar`` ``sensor_msgs/msg/LaserScan`` — the sonar rays (live recordings);
 * ``/ROBOT/led`` ``std_msgs/msg/String`` — the LED, whenever it changes;
+* ``/ROBOT/phase`` ``std_msgs/msg/String`` — the phase its program reported, at the first
+  recorded tick after the world heard it (live recordings, ``sim_hw.continuous._phases``);
 * ``/boxes/BOX/pose`` ``geometry_msgs/msg/PoseStamped`` — each box's pose;
 * ``/arena`` ``visualization_msgs/msg/MarkerArray`` — walls, obstacles and immovables, once.
 
@@ -163,6 +165,8 @@ class McapSink(McapFile):
                 self._sensors(rid, sensors[rid], head, t)
         if tf:
             self._put("/tf", "tf2_msgs/TFMessage", {"transforms": tf}, t)
+        for member, phase in tick.get("phases", {}).items():
+            self._put(f"/{member}/phase", "std_msgs/String", {"data": str(phase)}, t)
         for bid, p in tick.get("boxes", {}).items():
             self._put(
                 f"/boxes/{bid}/pose",

@@ -107,6 +107,7 @@ class Recorder:
         self.world = world
         self.every = max(1, every)
         self._sink = open_sink(self.path)
+        self._phases: dict[str, str] = {}
         self._sink.write(scene_header(world))
         self._write({"type": "tick", **world.snapshot(), "commands": {}})
 
@@ -115,7 +116,14 @@ class Recorder:
         if world.tick % self.every == 0:
             self._write({"type": "tick", **world.snapshot(), "commands": dict(commands)})
 
+    def phase(self, member: str, phase: str) -> None:
+        """``member``'s program reported ``phase``: written with the next recorded tick (its
+        ``phases``; see :mod:`sim_hw.continuous._phases`)."""
+        self._phases[member] = phase
+
     def _write(self, record: dict[str, Any]) -> None:
+        if self._phases:
+            record["phases"], self._phases = self._phases, {}
         if self._sink.sensors:
             record["sensors"] = {rid: self._sensors(rid) for rid in record["robots"]}
         self._sink.write(record)

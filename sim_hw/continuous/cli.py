@@ -104,7 +104,7 @@ def run_world(args: argparse.Namespace) -> int:
         asyncio.run(
             run_world_process(
                 server,
-                serve_world,
+                serve_world if recorder is None else _recording(recorder),
                 name=args.name,
                 until_tick=None if args.until is None else math.ceil(round(args.until / TICK, 9)),
                 quit_when_empty=args.quit_when_empty,
@@ -121,6 +121,22 @@ def run_world(args: argparse.Namespace) -> int:
         if recorder is not None:
             recorder.close()
     return 0
+
+
+def _recording(recorder: Any) -> Any:
+    """``serve_world``, plus a watch of the robots' program phases for ``recorder``."""
+    from . import serve_world
+    from ._phases import watch_phases
+
+    def export(node: Any, server: Any) -> None:
+        serve_world(node, server)
+        task = asyncio.ensure_future(watch_phases(node, server.door.stepper.robots, recorder.phase))
+        _KEEP.append(task)
+
+    return export
+
+
+_KEEP: list[asyncio.Future[None]] = []  # the phase watch runs as long as the world's loop
 
 
 def register_replay(sub: Any) -> None:
