@@ -200,6 +200,8 @@ def run(args: argparse.Namespace) -> int:
     from ._server import serve_grid
 
     layout = json_object(args.layout, "--layout") if args.layout else {}
+    if args.record and Path(args.record).suffix != ".mcap":
+        raise UsageError(f"--record: a grid run records as .mcap, got {args.record!r}")
     server = build_server(
         args.file,
         layout,
@@ -263,8 +265,6 @@ def _recorder(args: argparse.Namespace, server: GridServer) -> Any:
     """The MCAP recorder of ``--record``, hooked on the door, or None."""
     if not args.record:
         return None
-    if Path(args.record).suffix != ".mcap":
-        raise UsageError(f"--record: a grid run records as .mcap, got {args.record!r}")
     from ._mcap import GridMcapSink
 
     try:

@@ -121,3 +121,14 @@ def test_a_grid_recording_is_not_a_png_nor_exported_again(
         )
         assert done.returncode == 2 and says in done.stderr, done.stderr
         assert len(done.stderr.strip().splitlines()) == 1
+
+
+def test_a_grid_records_as_mcap_only(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    from mover.cli._main import main
+
+    path = str(ROOT / "teams" / "foraging_field.txt")  # the grid of docs/recordings.md
+    assert main(["gridworld", path, "--record", str(tmp_path / "grid.jsonl")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [
+        f"mover gridworld: --record: a grid run records as .mcap, got '{tmp_path / 'grid.jsonl'}'"
+    ]
