@@ -140,8 +140,14 @@ class Recorder:
         }
 
     def close(self) -> None:
-        """Flush and close the file."""
-        self._sink.close()
+        """Write the phases heard since the last recorded tick (a lock-step world whose robots
+        are idle does not tick: a run's last phase comes after its last tick) with the world
+        as it is, then flush and close the file."""
+        try:
+            if self._phases:
+                self._write({"type": "tick", **self.world.snapshot(), "commands": {}})
+        finally:
+            self._sink.close()
 
 
 def read_recording(path: str | Path) -> tuple[dict[str, Any], list[dict[str, Any]]]:

@@ -1,6 +1,7 @@
 """The world's watch of program phases, on a stand-in node: a run's phase from ``mover.status``
 when the run is first seen, then every report on its progress topic, each change once; a robot
-that does not answer is asked again later. And the Recorder writes a phase with the next tick."""
+that does not answer is asked again later. And the Recorder writes a phase with the next tick,
+or as the file closes."""
 
 from __future__ import annotations
 
@@ -90,6 +91,8 @@ def test_the_recorder_writes_a_phase_with_the_next_tick(tmp_path: Path) -> None:
     recorder.phase("ernst", "searching")
     recorder({})
     recorder({})
+    recorder.phase("ernst", "done")  # after the last tick: written as the file closes
     recorder.close()
     ticks = [json.loads(line) for line in path.read_text().splitlines()[1:]]
-    assert [t.get("phases") for t in ticks] == [None, {"ernst": "searching"}, None]
+    phases = [t.get("phases") for t in ticks]
+    assert phases == [None, {"ernst": "searching"}, None, {"ernst": "done"}]
