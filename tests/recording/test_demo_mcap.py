@@ -86,6 +86,7 @@ def test_rerun_opens_it_poses_transforms_and_leds(
     jsonl, mcap = exported
     _, ticks = read_recording(jsonl)
     got = rerun_entities(mcap, tmp_path / "run.rrd")
+    print({entity: kinds for entity, kinds in got.items() if not entity.startswith("/__")})
     counts: dict[str, Any] = {}
     for rid in ("elvis", "ernst", "moseley"):
         n = sum(1 for t in ticks if rid in t["robots"])
