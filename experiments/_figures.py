@@ -3,7 +3,9 @@ options of every runner's command line, count axes, error-bar captions, and savi
 
 A figure says what its error bars are (one standard deviation, or one standard error of the
 mean) in its legend's title; counts (agents, robots, targets) get integer ticks at the counts
-measured, never overlapping; ``--format svg`` or ``pdf`` writes vector figures for papers.
+measured, never overlapping; ``--format svg`` or ``pdf`` writes vector figures for papers. A
+caption counts runs with :func:`runs_label` (1 run, 2 runs), and a table column takes one
+precision for all its cells (:func:`shared_precision`).
 """
 
 from __future__ import annotations
@@ -57,6 +59,18 @@ def count_axis(ax: Any, counts: Sequence[float], axis: str = "x", log: bool = Fa
     formatter = ScalarFormatter()
     formatter.set_scientific(False)
     target.set_major_formatter(formatter)
+
+
+def runs_label(n: int) -> str:
+    """``"1 run"``, ``"5 runs"``: a count of runs for a caption or a panel's title."""
+    return f"{n} run" if n == 1 else f"{n} runs"
+
+
+def shared_precision(means: Sequence[float]) -> int:
+    """Decimals for a whole table column (or row) of ``means``, so that one column does not
+    mix precisions: 0 when the largest magnitude is 100 or more, 2 from 1, else 4."""
+    top = max((abs(float(m)) for m in means), default=0.0)
+    return 0 if top >= 100 else 2 if top >= 1 else 4
 
 
 def legend(ax: Any, spread: Spread | None, **kwargs: Any) -> None:

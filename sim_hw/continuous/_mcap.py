@@ -9,6 +9,8 @@ Topics (frame ``world``; stamps and log times in simulated time, t = 0 at the ru
 * ``/ROBOT/cmd_vel`` ``geometry_msgs/msg/TwistStamped`` — the drive command in force;
 * ``/ROBOT/sonar`` ``sensor_msgs/msg/LaserScan`` — the sonar rays (live recordings);
 * ``/ROBOT/led`` ``std_msgs/msg/String`` — the LED, whenever it changes;
+* ``/ROBOT/phase`` ``std_msgs/msg/String`` — the phase its program reported, at the first
+  recorded tick after the world heard it (live recordings, ``sim_hw.continuous._phases``);
 * ``/boxes/BOX/pose`` ``geometry_msgs/msg/PoseStamped`` — each box's pose;
 * ``/arena`` ``visualization_msgs/msg/MarkerArray`` — walls, obstacles and immovables, once.
 
@@ -43,7 +45,8 @@ def _need() -> Any:
     return Writer
 
 
-def _stamp(t: float) -> dict[str, int]:
+def stamp(t: float) -> dict[str, int]:
+    """A ``builtin_interfaces/Time`` of ``t`` seconds (whole nanoseconds)."""
     ns = round(t * 1e9)
     return {"sec": ns // 1_000_000_000, "nanosec": ns % 1_000_000_000}
 
@@ -52,7 +55,8 @@ def _quat(theta: float) -> dict[str, float]:
     return {"x": 0.0, "y": 0.0, "z": math.sin(theta / 2), "w": math.cos(theta / 2)}
 
 
-def _pose(p: Any) -> dict[str, Any]:
+def pose_msg(p: Any) -> dict[str, Any]:
+    """A ``geometry_msgs/Pose`` in the plane from ``(x, y, theta, ...)``."""
     return {"position": {"x": p[0], "y": p[1], "z": 0.0}, "orientation": _quat(p[2])}
 
 
@@ -60,7 +64,49 @@ def _point(x: float, y: float) -> dict[str, float]:
     return {"x": float(x), "y": float(y), "z": 0.0}
 
 
-class McapSink:
+class McapFile:
+    """An MCAP file of ROS 2 messages being written: each message type's schema registered on
+    first use, log and publish times in simulated seconds, and mover's metadata record. The
+    continuous world's :class:`McapSink` and the grid world's
+    (:class:`sim_hw.grid._mcap.GridMcapSink`) write through it."""
+
+    def __init__(self, path: str | Path) -> None:
+        writer_class = _need()
+        self._file = Path(path).open("wb")  # noqa: SIM115 (closed by close())
+        self._writer = writer_class(self._file)
+        self._schemas: dict[str, Any] = {}
+
+    def put(self, topic: str, kind: str, message: Mapping[str, Any], t: float) -> None:
+        """Write ``message`` of type ``kind`` (``pkg/Type``) on ``topic`` at ``t`` s."""
+        schema = self._schemas.get(kind)
+        if schema is None:
+            schema = self._schemas[kind] = self._writer.register_msgdef(*msgdef(kind))
+        ns = round(t * 1e9)
+        self._writer.write_message(topic, schema, message, log_time=ns, publish_time=ns)
+
+    def metadata(self, header: Mapping[str, Any]) -> None:
+        """The ``mover`` metadata record: the seed, the name and the whole ``header``."""
+        meta = {"seed": str(header.get("seed")), "name": str(header.get("name", ""))}
+        meta["header"] = json.dumps(header, separators=(",", ":"))
+        self._writer._writer.add_metadata("mover", meta)  # mcap_ros2 keeps the raw writer there
+
+    def close(self) -> None:
+        """End the file (its summary and index) and close it."""
+        if not self._file.closed:
+            self._writer.finish()
+            self._file.close()
+
+
+def transform(rid: str, head: Mapping[str, Any], p: Any) -> dict[str, Any]:
+    """A ``geometry_msgs/TransformStamped`` from the world's frame to ``rid`` at pose ``p``."""
+    return {
+        "header": head,
+        "child_frame_id": rid,
+        "transform": {"translation": _point(p[0], p[1]), "rotation": _quat(p[2])},
+    }
+
+
+class McapSink(McapFile):
     """Writes the header and tick records of :class:`~sim_hw.continuous.Recorder` as ROS 2
     messages to ``path`` (a tick's optional ``sensors``: per robot ``sonar``, ``angles``,
     ``range_max``, ``odom``)."""
@@ -68,19 +114,12 @@ class McapSink:
     sensors = True  # the Recorder adds the robots' sensor readings to a tick
 
     def __init__(self, path: str | Path) -> None:
-        writer_class = _need()
-        self._file = Path(path).open("wb")  # noqa: SIM115 (closed by close())
-        self._writer = writer_class(self._file)
-        self._schemas: dict[str, Any] = {}
+        super().__init__(path)
         self._twist: dict[str, tuple[float, float]] = {}
         self._led: dict[str, str] = {}
 
     def _put(self, topic: str, kind: str, message: Mapping[str, Any], t: float) -> None:
-        schema = self._schemas.get(kind)
-        if schema is None:
-            schema = self._schemas[kind] = self._writer.register_msgdef(*msgdef(kind))
-        ns = round(t * 1e9)
-        self._writer.write_message(topic, schema, message, log_time=ns, publish_time=ns)
+        self.put(topic, kind, message, t)
 
     def write(self, record: Mapping[str, Any]) -> None:
         """Write one record: the header (metadata and the arena) or a tick."""
@@ -90,15 +129,13 @@ class McapSink:
             self._tick(record)
 
     def _header(self, header: Mapping[str, Any]) -> None:
-        meta = {"seed": str(header.get("seed")), "name": str(header.get("name", ""))}
-        meta["header"] = json.dumps(header, separators=(",", ":"))
-        self._writer._writer.add_metadata("mover", meta)  # mcap_ros2 keeps the raw writer there
+        self.metadata(header)
         markers = arena_markers(header)
         self._put("/arena", "visualization_msgs/MarkerArray", {"markers": markers}, 0.0)
 
     def _tick(self, tick: Mapping[str, Any]) -> None:
         t = float(tick.get("t", 0.0))
-        head = {"stamp": _stamp(t), "frame_id": FRAME}
+        head = {"stamp": stamp(t), "frame_id": FRAME}
         for rid, cmd in tick.get("commands", {}).items():
             v, w = self._twist.get(rid, (0.0, 0.0))
             self._twist[rid] = (float(cmd.get("v", v)), float(cmd.get("w", w)))
@@ -106,15 +143,12 @@ class McapSink:
         tf = []
         for rid, p in tick.get("robots", {}).items():
             self._put(
-                f"/{rid}/pose", "geometry_msgs/PoseStamped", {"header": head, "pose": _pose(p)}, t
+                f"/{rid}/pose",
+                "geometry_msgs/PoseStamped",
+                {"header": head, "pose": pose_msg(p)},
+                t,
             )
-            tf.append(
-                {
-                    "header": head,
-                    "child_frame_id": rid,
-                    "transform": {"translation": _point(p[0], p[1]), "rotation": _quat(p[2])},
-                }
-            )
+            tf.append(transform(rid, head, p))
             v, w = self._twist.get(rid, (0.0, 0.0))
             twist = {
                 "linear": {"x": v, "y": 0.0, "z": 0.0},
@@ -131,17 +165,19 @@ class McapSink:
                 self._sensors(rid, sensors[rid], head, t)
         if tf:
             self._put("/tf", "tf2_msgs/TFMessage", {"transforms": tf}, t)
+        for member, phase in tick.get("phases", {}).items():
+            self._put(f"/{member}/phase", "std_msgs/String", {"data": str(phase)}, t)
         for bid, p in tick.get("boxes", {}).items():
             self._put(
                 f"/boxes/{bid}/pose",
                 "geometry_msgs/PoseStamped",
-                {"header": head, "pose": _pose(p)},
+                {"header": head, "pose": pose_msg(p)},
                 t,
             )
 
     def _sensors(self, rid: str, got: Mapping[str, Any], head: Mapping[str, Any], t: float) -> None:
         if got.get("odom"):
-            odom = {"header": head, "pose": _pose(got["odom"])}
+            odom = {"header": head, "pose": pose_msg(got["odom"])}
             self._put(f"/{rid}/odom_pose", "geometry_msgs/PoseStamped", odom, t)
         ranges, angles = got.get("sonar"), list(got.get("angles") or ())
         if ranges and len(angles) == len(ranges):
@@ -160,12 +196,6 @@ class McapSink:
             }
             self._put(f"/{rid}/sonar", "sensor_msgs/LaserScan", scan, t)
 
-    def close(self) -> None:
-        """End the file (its summary and index) and close it."""
-        if not self._file.closed:
-            self._writer.finish()
-            self._file.close()
-
 
 def arena_markers(header: Mapping[str, Any]) -> list[dict[str, Any]]:
     """The arena's walls, obstacles and immovables as Humble ``visualization_msgs/Marker``s."""
@@ -175,12 +205,12 @@ def arena_markers(header: Mapping[str, Any]) -> list[dict[str, Any]]:
     def marker(ns: str, kind: int, pose: Any, scale: tuple[float, float, float], **kw: Any) -> None:
         out.append(
             {
-                "header": {"stamp": _stamp(0.0), "frame_id": FRAME},
+                "header": {"stamp": stamp(0.0), "frame_id": FRAME},
                 "ns": ns,
                 "id": len(out),
                 "type": kind,
                 "action": 0,
-                "pose": _pose(pose),
+                "pose": pose_msg(pose),
                 "scale": dict(zip("xyz", scale, strict=True)),
                 "color": _GREY,
                 "lifetime": {"sec": 0, "nanosec": 0},
@@ -215,6 +245,8 @@ def export(src: str | Path, out: str | Path) -> int:
     """Write the JSON-lines recording ``src`` as MCAP to ``out``; the ticks written."""
     from ._record import read_recording
 
+    if Path(src).suffix == ".mcap":
+        raise ValueError(f"{src} is MCAP already")
     header, ticks = read_recording(src)
     sink = McapSink(out)
     try:
@@ -226,10 +258,23 @@ def export(src: str | Path, out: str | Path) -> int:
     return len(ticks)
 
 
+def recording_kind(path: str | Path) -> str:
+    """``grid`` or ``continuous``: which world's recording the MCAP file ``path`` is."""
+    _need()
+    from mcap.reader import make_reader
+
+    with Path(path).open("rb") as f:
+        for m in make_reader(f).iter_metadata():
+            if m.name == "mover":
+                return str(json.loads(m.metadata["header"]).get("kind", "continuous"))
+    raise ValueError(f"{path}: no mover metadata: not a recording of mover's")
+
+
 def read_mcap(path: str | Path) -> tuple[dict[str, Any], list[dict[str, Any]]]:
     """The header and tick records of an MCAP recording made by mover (what
     :func:`~sim_hw.continuous.read_recording` gives for JSON lines): the scene from the
-    metadata, the true poses of robots (with their LED) and boxes; commands are not read back."""
+    metadata, the true poses of robots (with their LED) and boxes; commands are not read back.
+    A grid world's recording (:mod:`sim_hw.grid._mcap`) gives its scene and its frames."""
     _need()
     from mcap.reader import make_reader
     from mcap_ros2.decoder import DecoderFactory
@@ -239,6 +284,10 @@ def read_mcap(path: str | Path) -> tuple[dict[str, Any], list[dict[str, Any]]]:
         header = next((m.metadata for m in reader.iter_metadata() if m.name == "mover"), None)
         if header is None:
             raise ValueError(f"{path}: no mover metadata: not a recording of mover's")
+        scene: dict[str, Any] = json.loads(header["header"])
+        if scene.get("kind") == "grid":  # sim_hw.grid._mcap: the frames as written
+            frames = reader.iter_decoded_messages(topics=["/grid/frame"], log_time_order=True)
+            return scene, [{"type": "tick", **json.loads(m.data)} for *_, m in frames]
         by_t: dict[int, dict[str, Any]] = {}
         led: dict[str, str] = {}
         for _, channel, message, msg in reader.iter_decoded_messages(log_time_order=True):
@@ -255,7 +304,6 @@ def read_mcap(path: str | Path) -> tuple[dict[str, Any], list[dict[str, Any]]]:
                 tick["boxes"][parts[1]] = pose
             else:
                 tick["robots"][parts[0]] = pose
-    scene: dict[str, Any] = json.loads(header["header"])
     ticks = []
     for ns, tick in sorted(by_t.items()):
         led.update(tick.pop("leds", {}))

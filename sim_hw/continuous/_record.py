@@ -107,6 +107,7 @@ class Recorder:
         self.world = world
         self.every = max(1, every)
         self._sink = open_sink(self.path)
+        self._phases: dict[str, str] = {}
         self._sink.write(scene_header(world))
         self._write({"type": "tick", **world.snapshot(), "commands": {}})
 
@@ -115,7 +116,14 @@ class Recorder:
         if world.tick % self.every == 0:
             self._write({"type": "tick", **world.snapshot(), "commands": dict(commands)})
 
+    def phase(self, member: str, phase: str) -> None:
+        """``member``'s program reported ``phase``: written with the next recorded tick (its
+        ``phases``; see :mod:`sim_hw.continuous._phases`)."""
+        self._phases[member] = phase
+
     def _write(self, record: dict[str, Any]) -> None:
+        if self._phases:
+            record["phases"], self._phases = self._phases, {}
         if self._sink.sensors:
             record["sensors"] = {rid: self._sensors(rid) for rid in record["robots"]}
         self._sink.write(record)
@@ -132,8 +140,14 @@ class Recorder:
         }
 
     def close(self) -> None:
-        """Flush and close the file."""
-        self._sink.close()
+        """Write the phases heard since the last recorded tick (a lock-step world whose robots
+        are idle does not tick: a run's last phase comes after its last tick) with the world
+        as it is, then flush and close the file."""
+        try:
+            if self._phases:
+                self._write({"type": "tick", **self.world.snapshot(), "commands": {}})
+        finally:
+            self._sink.close()
 
 
 def read_recording(path: str | Path) -> tuple[dict[str, Any], list[dict[str, Any]]]:
@@ -205,7 +219,8 @@ def _places(poses: Mapping[str, Sequence[Any]]) -> dict[str, tuple[float, float,
 def plot_recording(path: str | Path, out: str | Path) -> None:
     """Draw the arena and every robot's and box's trajectory to a PNG.
 
-    Obstacles and immovables are drawn as their shapes (circles as circles); each track has one
+    Obstacles (solid grey) and immovables (hatched, named) are drawn as their shapes (circles as
+    circles), each kind in the legend; each track has one
     colour for its line, its start (a hollow square) and its end (a dot), as in the legend;
     boxes are outlined where they started (dashed) and ended; axes are in metres; the title
     gives the time the run ended (see :func:`run_end`).
@@ -227,7 +242,7 @@ def draw_recording(header: Mapping[str, Any], ticks: Sequence[Mapping[str, Any]]
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.lines import Line2D
-    from matplotlib.patches import Circle, Polygon, Rectangle
+    from matplotlib.patches import Circle, Patch, Polygon, Rectangle
 
     w, h = header["size"]
     fig, ax = plt.subplots(figsize=(7.5, max(3.0, 7.5 * h / w) if w else 7.5))
@@ -240,14 +255,17 @@ def draw_recording(header: Mapping[str, Any], ticks: Sequence[Mapping[str, Any]]
             ax.add_patch(Polygon(corners, color="0.45", label="_obstacle"))
         else:
             ax.plot([ob["a"][0], ob["b"][0]], [ob["a"][1], ob["b"][1]], color="0.45", lw=3)
+    immovable: dict[str, Any] = {"fc": "0.85", "ec": "0.1", "hatch": "////", "lw": 1.2}
     for im in header.get("immovables", []):
         if im.get("shape") == "circle":
-            patch: Any = Circle(im["center"], im["radius"], color="0.2", label="_immovable")
+            patch: Any = Circle(im["center"], im["radius"], label="_immovable", **immovable)
         else:
             corners = box_corners(im["center"], im["size"], im["angle"])
-            patch = Polygon(corners, color="0.2", label="_immovable")
+            patch = Polygon(corners, label="_immovable", **immovable)
         ax.add_patch(patch)
-        ax.annotate(im["id"], im["center"], fontsize=7, ha="center", va="center", color="w")
+        ax.annotate(
+            im["id"], im["center"], fontsize=7, ha="center", va="center", backgroundcolor="w"
+        )
     marked = ticks[-1].get("marked", {}) if ticks else {}
     for mk in header.get("markers", []):
         hit = mk["id"] in marked
@@ -293,6 +311,10 @@ def draw_recording(header: Mapping[str, Any], ticks: Sequence[Mapping[str, Any]]
             Line2D([], [], ls="", marker="s", mfc="none", mec="0.3", label="start"),
             Line2D([], [], ls="", marker="o", color="0.3", label="end"),
         ]
+        if header.get("obstacles"):
+            handles.append(Patch(color="0.45", label="obstacle"))
+        if header.get("immovables"):
+            handles.append(Patch(label="immovable object", **immovable))
         ax.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     fig.tight_layout()
     return fig

@@ -105,7 +105,7 @@ def run_world(args: argparse.Namespace) -> int:
         asyncio.run(
             run_world_process(
                 server,
-                serve_world,
+                serve_world if recorder is None else _recording(recorder),
                 name=args.name,
                 until_tick=None if args.until is None else math.ceil(round(args.until / TICK, 9)),
                 quit_when_empty=args.quit_when_empty,
@@ -122,6 +122,22 @@ def run_world(args: argparse.Namespace) -> int:
         if recorder is not None:
             recorder.close()
     return 0
+
+
+def _recording(recorder: Any) -> Any:
+    """``serve_world``, plus a watch of the robots' program phases for ``recorder``."""
+    from . import serve_world
+    from ._phases import watch_phases
+
+    def export(node: Any, server: Any) -> None:
+        serve_world(node, server)
+        task = asyncio.ensure_future(watch_phases(node, server.door.stepper.robots, recorder.phase))
+        _KEEP.append(task)
+
+    return export
+
+
+_KEEP: list[asyncio.Future[None]] = []  # the phase watch runs as long as the world's loop
 
 
 def register_replay(sub: Any) -> None:
@@ -164,6 +180,11 @@ def run_replay(args: argparse.Namespace) -> int:
 
             return replay(args.file, port=args.port, bind=args.bind, rrd=out)
         else:
+            if Path(args.file).suffix == ".mcap":
+                from ._mcap import recording_kind
+
+                if recording_kind(args.file) == "grid":
+                    raise UsageError(f"{args.file}: a grid recording plays in the viewer only")
             plot_recording(args.file, out)
     except ValueError as exc:
         raise UsageError(str(exc)) from None

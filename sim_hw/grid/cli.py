@@ -15,6 +15,7 @@ explored | never), ``pheromone`` (true, or {"diffusion": d, "evaporation": e}), 
 
 The process joins the team of the environment (``MOVER_*``), exports ``join``, ``step``,
 ``leave``, ``state`` and ``snapshot(path)``, and prints ``READY`` once it serves.
+``--record run.mcap`` records the run as MCAP with ROS 2 messages (``sim_hw.grid._mcap``).
 """
 
 from __future__ import annotations
@@ -63,11 +64,19 @@ def register(sub: Any) -> None:
     )
     p.add_argument("--snapshots", metavar="DIR", help="write text snapshots to DIR")
     p.add_argument(
+        "--record",
+        metavar="FILE.mcap",
+        help="record the run as MCAP with ROS 2 messages (nav_msgs/OccupancyGrid of the cells "
+        "and the floor values, the robots' poses), a snapshot every round, or every "
+        "--snapshot-every N rounds, and at the end (the mcap extra)",
+    )
+    p.add_argument(
         "--snapshot-every",
         type=count,
         default=0,
         metavar="N",
-        help="a snapshot every N rounds (with --snapshots; 0: only at the end)",
+        help="a snapshot every N rounds (with --snapshots: 0, only at the end; with --record: "
+        "0, every round)",
     )
     p.set_defaults(func=run)
 
@@ -191,6 +200,8 @@ def run(args: argparse.Namespace) -> int:
     from ._server import serve_grid
 
     layout = json_object(args.layout, "--layout") if args.layout else {}
+    if args.record and Path(args.record).suffix != ".mcap":
+        raise UsageError(f"--record: a grid run records as .mcap, got {args.record!r}")
     server = build_server(
         args.file,
         layout,
@@ -225,6 +236,7 @@ def run(args: argparse.Namespace) -> int:
         team, config = TeamCredentials.from_env(), NodeConfig.from_env()
     except ValueError as exc:
         raise UsageError(str(exc)) from None
+    recorder = _recorder(args, server)
     try:
         asyncio.run(
             run_world_process(
@@ -244,4 +256,20 @@ def run(args: argparse.Namespace) -> int:
     finally:
         if args.snapshots:
             _write_snapshot(server, Path(args.snapshots))
+        if recorder is not None:
+            recorder.close()
     return 0
+
+
+def _recorder(args: argparse.Namespace, server: GridServer) -> Any:
+    """The MCAP recorder of ``--record``, hooked on the door, or None."""
+    if not args.record:
+        return None
+    from ._mcap import GridMcapSink
+
+    try:
+        recorder = GridMcapSink(args.record, server, seed=args.seed, every=args.snapshot_every)
+    except OSError as exc:
+        raise UsageError(f"cannot write {args.record}: {exc.strerror or exc}") from None
+    server.door.on_tick.append(recorder)
+    return recorder

@@ -6,7 +6,10 @@ as a child process: it serves the web viewer's page, script and Wasm from the pa
 included, up to :data:`MEMORY_LIMIT` (then the oldest data goes). The SDK's in-process
 ``serve_grpc`` would do the same but listens on every interface with no way to say otherwise;
 a world's positions are the team's business, so the child binds ``--bind`` (loopback by
-default). The child dies with its parent (``PR_SET_PDEATHSIG``), a SIGKILLed view included.
+default). The child dies with its parent (``PR_SET_PDEATHSIG``), a SIGKILLed view included. It
+runs in a session of its own: a terminal's Ctrl-C reaches the view alone, which closes its
+recording (rerun's client would print an error for a server already gone) and then stops the
+child.
 
 Costs (measured on the project's 2-core machine, rough): the server child idles at ~0 CPU and
 stays under 0.01 CPU-s/s while a world runs; rerun-sdk 0.41 is a 170 MB wheel (with pyarrow,
@@ -116,6 +119,7 @@ class ViewerServer:
             stdout=subprocess.DEVNULL,
             stderr=self._err,
             env=env,
+            start_new_session=True,  # a terminal's Ctrl-C is the view's to handle, not rerun's
         )
         deadline = time.monotonic() + START_TIMEOUT
         while not (_listening(self.bind, self.port) and _listening(self.bind, self.grpc_port)):

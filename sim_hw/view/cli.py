@@ -130,7 +130,7 @@ def replay(path: str, *, port: int, bind: str, rrd: str | None = None) -> int:
 
     rerun_binary()  # rerun-sdk is there, else one line
     header, ticks = read_recording(path)
-    header = {**header, "kind": "continuous"}
+    header = {"kind": "continuous", **header}  # a grid's MCAP recording says "grid"
     names = {r for t in ticks for r in t.get("robots", {})}
     say = _say("replay")
     if rrd is not None:

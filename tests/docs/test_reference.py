@@ -72,5 +72,5 @@ def test_the_world_file_page_names_every_key(monkeypatch: pytest.MonkeyPatch) ->
 
 def test_the_formats_page_names_every_key_of_a_recording() -> None:
     world = World(load_world(ROOT / "worlds" / "search_and_rescue.toml"), seed=1)
-    keys = set(scene_header(world)) | set(world.snapshot()) | {"commands"}
+    keys = set(scene_header(world)) | set(world.snapshot()) | {"commands", "phases"}
     assert _missing(keys, REFERENCE / "formats.md") == []

@@ -22,15 +22,10 @@ from pathlib import Path
 import pytest
 
 from mover.cli._router import generate_config
-from mover.testing import Netlab, netlab_unavailable
+from mover.testing import Netlab
+from tests.netlab import LAB
 
-pytestmark = [
-    pytest.mark.processes,
-    pytest.mark.netns,
-    pytest.mark.skipif(
-        (reason := netlab_unavailable()) is not None, reason=f"no lab of hosts: {reason}"
-    ),
-]
+pytestmark = LAB
 
 PORT = 7448
 ATTACK = 1000

@@ -28,16 +28,11 @@ from mover._impair import Impairment
 from mover._netteam import WORKSTATION, RunResult, last_tick, losses
 from mover._up import load_team
 from mover._up._teamfile import ProgramPlan, TeamPlan
-from mover.testing import Netlab, TeamAcrossHosts, netlab_unavailable
+from mover.testing import Netlab, TeamAcrossHosts
 from tests.helpers.procs import ROOT
+from tests.netlab import LAB
 
-pytestmark = [
-    pytest.mark.processes,
-    pytest.mark.netns,
-    pytest.mark.skipif(
-        (reason := netlab_unavailable()) is not None, reason=f"no lab of hosts: {reason}"
-    ),
-]
+pytestmark = LAB
 
 SEED = 1
 HOSTS = ("a", "b", "c")

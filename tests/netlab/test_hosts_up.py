@@ -15,16 +15,11 @@ from pathlib import Path
 import pytest
 
 from mover._procs import Child, stop
-from mover.testing import Netlab, netlab_unavailable
+from mover.testing import Netlab
 from tests.helpers.procs import ROOT
+from tests.netlab import LAB
 
-pytestmark = [
-    pytest.mark.processes,
-    pytest.mark.netns,
-    pytest.mark.skipif(
-        (reason := netlab_unavailable()) is not None, reason=f"no lab of hosts: {reason}"
-    ),
-]
+pytestmark = LAB
 
 TEAM = """\
 [team]

@@ -12,16 +12,11 @@ import textwrap
 
 import pytest
 
-from mover.testing import Netlab, netlab_unavailable
+from mover.testing import Netlab
 from tests.helpers.procs import ROOT
+from tests.netlab import LAB
 
-pytestmark = [
-    pytest.mark.processes,
-    pytest.mark.netns,
-    pytest.mark.skipif(
-        (reason := netlab_unavailable()) is not None, reason=f"no lab of hosts: {reason}"
-    ),
-]
+pytestmark = LAB
 
 CONNECT = "import socket,sys; socket.create_connection((sys.argv[1], 9000), timeout=3).close()"
 SERVE = textwrap.dedent(

@@ -75,6 +75,11 @@ async def test_the_png_of_the_search_and_rescue_recording(tmp_path: Path) -> Non
         assert isinstance(shown[robot], Line2D)
         assert to_hex(shown[robot].get_color()) == colours[robot], "the legend's colours match"
     assert {"start", "end"} <= shown.keys()
+    # obstacles solid, immovables hatched: told apart on the page and in the legend
+    obstacle, immovable = shown["obstacle"], shown["immovable object"]
+    assert not obstacle.get_hatch() and immovable.get_hatch()
+    rock_patch = next(c for c in circles if tuple(c.center) == tuple(rock["center"]))
+    assert rock_patch.get_hatch() == immovable.get_hatch()
     png = tmp_path / "run.png"
     assert main(["replay", str(rec), "--out", str(png)]) == 0
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
