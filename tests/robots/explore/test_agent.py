@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import msgpack
 import numpy as np
+import pytest
 
 from robots.explore import (
     FREE,
@@ -75,6 +76,10 @@ def test_cu_lvp_agents_take_balanced_regions_baselines_plain_ones() -> None:
     nf = make_team("nf", maze.shape, maze.starts, 1)[3]
     assert (lvp.in_region() == (balanced_partition(inner, maze.starts) == 3).ravel()).all()
     assert (nf.in_region() == (voronoi_partition(inner, maze.starts) == 3).ravel()).all()
+    old = make_team("cu-lvp", maze.shape, maze.starts, 1, partition="voronoi")[3]
+    assert (old.in_region() == nf.in_region()).all()  # the earlier reading, kept as an option
+    with pytest.raises(ValueError, match="unknown partition 'square'"):
+        make_policy("cu-lvp", "square")
 
 
 def test_messages_carry_only_changes_and_merge() -> None:
