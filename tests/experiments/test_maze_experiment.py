@@ -137,3 +137,21 @@ def test_partition_option_names_the_saved_runs_apart(tmp_path: Path) -> None:
         for p in ("voronoi", "balanced")
     ]
     assert (nf[0]["rounds"], nf[0]["cost"]) == (nf[1]["rounds"], nf[1]["cost"])  # plain both
+
+
+def test_compare_reference_pairs_runs_per_maze(tmp_path: Path) -> None:
+    from experiments.maze.compare_reference import table
+
+    (tmp_path / "ours" / "7").mkdir(parents=True)
+    ours = [{"run": k, "rounds": r} for k, r in enumerate((70, 80, 90))]
+    theirs = [{"p": 0.85, "agents": 8, "run": k, "rounds": r} for k, r in enumerate((75, 80))]
+    theirs.append({"p": 0.15, "agents": 8, "run": 0, "rounds": 50})
+    path = tmp_path / "ours" / "7" / "cu-lvp-n8-s30-p0.85-x3.jsonl"
+    path.write_text("".join(json.dumps(r) + "\n" for r in ours))
+    (tmp_path / "ref-s7.jsonl").write_text("".join(json.dumps(r) + "\n" for r in theirs))
+    row = next(line for line in table(tmp_path / "ours", tmp_path, (7,)).splitlines()[2:]
+               if line.startswith("| 0.85 | 8 |"))  # fmt: skip
+    # runs 0 and 1 pair (run 2 has no reference): differences -5 and 0
+    assert row == (
+        "| 0.85 | 8 | -2.5 ± 2.5 (2) | **-2.5 ± 2.5 (2)** | 75.0 / 77.5 | 3.2 % | 1 / 1 / 0 |"
+    )
