@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from mover.cli import UsageError
-from robots.explore import EXCHANGES, METHODS
+from robots.explore import EXCHANGES, METHODS, PARTITIONS
 from sim_hw.grid import MazeFileError, load_maze
 
 from .._common import (
@@ -73,6 +73,13 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         help=f"map exchanges per round (default {EXCHANGES}: two relay hops;"
         " 1: the paper's single exchange)",
     )
+    parser.add_argument(
+        "--partition",
+        choices=PARTITIONS,
+        default="balanced",
+        help="CU-LVP's regions: balanced (default: about equal sizes) or voronoi (the plain"
+        " partition, as before)",
+    )
     parser.add_argument("--maze", type=Path, default=None, help="run on this maze JSON file")
     add_figure_arguments(parser)
     parser.add_argument(
@@ -119,6 +126,7 @@ def settings(args: argparse.Namespace) -> MazeSettings:
         size=args.size,
         p=tuple(args.p),
         exchanges=args.exchanges,
+        partition=args.partition,
         maze=maze,
         maze_path=args.maze,
         out=None if args.no_plots else args.out,
@@ -141,7 +149,7 @@ def run(args: argparse.Namespace) -> int:
         f"methods: {','.join(s.methods)}  agents: {','.join(map(str, s.agents))}  "
         f"runs: {s.runs} (hedac {s.runs_for('hedac')})  "
         + (f"maze: {s.maze_path}" if s.maze_path else f"size: {s.size}  p: {list(s.p)}")
-        + f"  exchanges: {s.exchanges}"
+        + f"  exchanges: {s.exchanges}  partition: {s.partition}"
     )
     records = trials(s)
     _report(records, list(s.methods), list(s.agents), s)

@@ -30,6 +30,7 @@ class MazeSettings:
     size: int
     p: tuple[float, ...]
     exchanges: int = EXCHANGES
+    partition: str = "balanced"  # CU-LVP's regions (robots.explore.PARTITIONS)
     maze: Maze | None = None
     maze_path: Path | None = None
     out: Path | None = None

@@ -32,12 +32,22 @@ METHODS = {
 }
 
 
-def make_policy(method: str) -> Policy:
-    """A fresh policy for ``method`` (one of :data:`METHODS`) with the paper's parameters."""
+PARTITIONS = ("balanced", "voronoi")
+"""CU-LVP's regions: of about equal size (the default), or the plain Voronoi partition."""
+
+
+def make_policy(method: str, partition: str = "balanced") -> Policy:
+    """A fresh policy for ``method`` (one of :data:`METHODS`) with the paper's parameters;
+    ``partition`` (one of :data:`PARTITIONS`) sets CU-LVP's regions (the baselines': plain)."""
+    if partition not in PARTITIONS:
+        raise ValueError(f"unknown partition {partition!r}; choose from {', '.join(PARTITIONS)}")
     try:
-        return METHODS[method]()  # type: ignore[no-any-return]
+        policy = METHODS[method]()
     except KeyError:
         raise ValueError(f"unknown method {method!r}; choose from {', '.join(METHODS)}") from None
+    if isinstance(policy, CULVP):
+        policy.partition = partition
+    return policy  # type: ignore[no-any-return]
 
 
 def make_team(
@@ -45,6 +55,7 @@ def make_team(
     shape: tuple[int, int],
     starts: list[tuple[int, int]],
     seed: int | np.random.SeedSequence,
+    partition: str = "balanced",
 ) -> list[ExplorerAgent]:
     """One agent per start cell, each with its own policy and an independent seeded stream."""
     seqs = (
@@ -53,7 +64,7 @@ def make_team(
         else seed.spawn(len(starts))
     )
     return [
-        ExplorerAgent(i, shape, starts, make_policy(method), np.random.default_rng(s))
+        ExplorerAgent(i, shape, starts, make_policy(method, partition), np.random.default_rng(s))
         for i, s in enumerate(seqs)
     ]
 
@@ -65,6 +76,7 @@ __all__ = [
     "FREE",
     "METHODS",
     "OBSTACLE",
+    "PARTITIONS",
     "STAY",
     "UNKNOWN",
     "CostUtilityBSO",

@@ -24,7 +24,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from ._grid import FREE, OBSTACLE, UNKNOWN, passable_mask, path_to, wavefront
-from ._voronoi import voronoi_partition
+from ._voronoi import balanced_partition, voronoi_partition
 
 Move = tuple[int, int]
 STAY: Move = (0, 0)
@@ -89,7 +89,14 @@ class ExplorerAgent:
         self._share: np.ndarray | None = None  # ``_share_of_region`` until the map, the
         # agent's cell, its regions or the agents heard change
         # Section III-B: regions from the initial map, where all unknown space counts as free.
-        self.region_of = voronoi_partition(self.known != OBSTACLE, list(starts)).ravel()
+        # CU-LVP balances their sizes (``partition = "balanced"``); the baselines keep the
+        # plain Voronoi partition.
+        split = (
+            balanced_partition
+            if getattr(policy, "partition", "voronoi") == "balanced"
+            else voronoi_partition
+        )
+        self.region_of = split(self.known != OBSTACLE, list(starts)).ravel()
         self.regions: frozenset[int] = frozenset({agent_id})  # assigned: explored first
         self.merged: frozenset[int] = frozenset()  # regions of agents met, explored next
         self._in_region: np.ndarray = self.region_of == agent_id

@@ -196,6 +196,7 @@ class CULVP(FrontierPolicy):
 
     name = "cu-lvp"
     region_choice = "estimate"  # see ExplorerAgent.switch_region
+    partition = "balanced"  # regions of about equal size: see balanced_partition
 
     def __init__(self, lam: float = 0.2, reach: int = 2) -> None:
         self.lam = lam

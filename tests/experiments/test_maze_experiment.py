@@ -111,3 +111,47 @@ def test_settings_come_from_the_command_line_once() -> None:
         3, 1, 3, (2, 4), None,
     )  # fmt: skip
     assert args.seed is None and 0 <= s.seed < 2**32  # a random seed, not written onto args
+
+
+def test_partition_option_names_the_saved_runs_apart(tmp_path: Path) -> None:
+    from experiments.maze import settings
+    from experiments.maze._trial import point_file, run_trial
+
+    plain = settings(_parse("--partition", "voronoi", "--save", str(tmp_path), "--no-plots"))
+    balanced = settings(_parse("--save", str(tmp_path), "--no-plots"))
+    assert (plain.partition, balanced.partition) == ("voronoi", "balanced")
+    assert point_file(plain, "cu-lvp", 8, 0.85).name == "cu-lvp-n8-s30-p0.85-x3-voronoi.jsonl"
+    assert point_file(balanced, "cu-lvp", 8, 0.85).name == "cu-lvp-n8-s30-p0.85-x3.jsonl"
+    assert point_file(plain, "nf", 8, 0.85) == point_file(balanced, "nf", 8, 0.85)
+    with pytest.raises(SystemExit):
+        _parse("--partition", "square")
+    # the option reaches the agents: 8 agents' runs differ on a maze with unequal regions
+    maze = generate_maze(30, 0.85, np.random.default_rng(5), n_starts=8)
+    runs = [
+        run_trial(maze, 8, "cu-lvp", np.random.SeedSequence(1), partition=p)["cost"]
+        for p in ("voronoi", "balanced")
+    ]
+    assert runs[0] != runs[1]
+    nf = [
+        run_trial(maze, 8, "nf", np.random.SeedSequence(1), partition=p)
+        for p in ("voronoi", "balanced")
+    ]
+    assert (nf[0]["rounds"], nf[0]["cost"]) == (nf[1]["rounds"], nf[1]["cost"])  # plain both
+
+
+def test_compare_reference_pairs_runs_per_maze(tmp_path: Path) -> None:
+    from experiments.maze.compare_reference import table
+
+    (tmp_path / "ours" / "7").mkdir(parents=True)
+    ours = [{"run": k, "rounds": r} for k, r in enumerate((70, 80, 90))]
+    theirs = [{"p": 0.85, "agents": 8, "run": k, "rounds": r} for k, r in enumerate((75, 80))]
+    theirs.append({"p": 0.15, "agents": 8, "run": 0, "rounds": 50})
+    path = tmp_path / "ours" / "7" / "cu-lvp-n8-s30-p0.85-x3.jsonl"
+    path.write_text("".join(json.dumps(r) + "\n" for r in ours))
+    (tmp_path / "ref-s7.jsonl").write_text("".join(json.dumps(r) + "\n" for r in theirs))
+    row = next(line for line in table(tmp_path / "ours", tmp_path, (7,)).splitlines()[2:]
+               if line.startswith("| 0.85 | 8 |"))  # fmt: skip
+    # runs 0 and 1 pair (run 2 has no reference): differences -5 and 0
+    assert row == (
+        "| 0.85 | 8 | -2.5 ± 2.5 (2) | **-2.5 ± 2.5 (2)** | 75.0 / 77.5 | 3.2 % | 1 / 1 / 0 |"
+    )

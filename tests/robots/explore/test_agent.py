@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import msgpack
 import numpy as np
+import pytest
 
 from robots.explore import (
     FREE,
@@ -15,6 +16,7 @@ from robots.explore import (
     unexplored_in_view,
     voronoi_partition,
 )
+from robots.explore._voronoi import balanced_partition
 from sim_hw.grid import generate_maze, star_view
 
 
@@ -41,6 +43,43 @@ def test_voronoi_is_geodesic() -> None:
     assert label[4, 2] == 0
     assert label[0, 6] == 1
     assert label[4, 3] == 0  # tie at the gap goes to the lower index
+
+
+def test_balanced_partition_evens_region_sizes() -> None:
+    open_room = np.ones((9, 9), dtype=bool)
+    for seeds, plain, balanced in (
+        ([(0, 0), (4, 4)], [23, 58], [35, 46]),
+        ([(0, 0), (3, 3), (8, 8)], [20, 46, 15], [31, 25, 25]),
+        ([(0, 0), (0, 2)], [18, 63], [18, 63]),  # seeds in a row: additive weights can't split
+    ):
+        assert np.bincount(voronoi_partition(open_room, seeds).ravel()).tolist() == plain
+        label = balanced_partition(open_room, seeds)
+        assert np.bincount(label.ravel()).tolist() == balanced
+        assert [label[s] for s in seeds] == list(range(len(seeds)))
+    # in random mazes' starts (8 agents) the largest region shrinks, each region stays whole
+    maze = generate_maze(30, 0.85, np.random.default_rng(5), n_starts=8)
+    inner = np.ones(maze.shape, dtype=bool)
+    inner[0, :] = inner[-1, :] = inner[:, 0] = inner[:, -1] = False
+    plain_label = voronoi_partition(inner, maze.starts)
+    label = balanced_partition(inner, maze.starts)
+    assert (label[inner] >= 0).all() and (label[~inner] == -1).all()
+    assert np.bincount(label[inner]).max() < np.bincount(plain_label[inner]).max()
+    for i, seed in enumerate(maze.starts):  # connected: one wavefront from the seed reaches all
+        assert (voronoi_partition(label == i, [seed]) == 0).sum() == (label == i).sum()
+
+
+def test_cu_lvp_agents_take_balanced_regions_baselines_plain_ones() -> None:
+    maze = generate_maze(30, 0.85, np.random.default_rng(5), n_starts=8)
+    inner = np.ones(maze.shape, dtype=bool)
+    inner[0, :] = inner[-1, :] = inner[:, 0] = inner[:, -1] = False
+    lvp = make_team("cu-lvp", maze.shape, maze.starts, 1)[3]
+    nf = make_team("nf", maze.shape, maze.starts, 1)[3]
+    assert (lvp.in_region() == (balanced_partition(inner, maze.starts) == 3).ravel()).all()
+    assert (nf.in_region() == (voronoi_partition(inner, maze.starts) == 3).ravel()).all()
+    old = make_team("cu-lvp", maze.shape, maze.starts, 1, partition="voronoi")[3]
+    assert (old.in_region() == nf.in_region()).all()  # the earlier reading, kept as an option
+    with pytest.raises(ValueError, match="unknown partition 'square'"):
+        make_policy("cu-lvp", "square")
 
 
 def test_messages_carry_only_changes_and_merge() -> None:
