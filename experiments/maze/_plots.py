@@ -52,10 +52,11 @@ def plots(
             ax.plot(xs, [scores[p][m][n] for n in xs], marker="o", label=m)
         ax.set_title(f"composite index, {'given maze' if p is None else f'p = {p:g}'}")
         ax.set_xlabel("agents")
+        ax.set_ylabel("composite index (rank points)")
         count_axis(ax, agents)
     legend(axes[0][0], None, fontsize=7)
     return [fig8, save(fig, out, "maze_composite", fmt)]
 
 
 def _sd(values: list[float]) -> float:
-    return float(np.std(values, ddof=1)) if len(values) > 1 else 0.0
+    return float(np.std(values, ddof=0)) if len(values) > 1 else 0.0  # as the tables

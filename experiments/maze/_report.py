@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from .._common import plus_minus, summary
+from .._figures import shared_precision
 from ._paper import EXTRA, METRICS
 
 Records = list[dict[str, Any]]
@@ -35,30 +36,31 @@ def where(p: float | None) -> str:
 
 
 def tables(records: Records, methods: list[str], agents: list[int]) -> str:
-    """Mean ± std of every metric: one table per obstacle probability and metric."""
+    """Mean ± sd (over the runs, ddof 0) of every metric: one table per obstacle probability
+    and metric, one precision a table (``shared_precision``)."""
     groups = group(records)
     out = []
     for p in probabilities(records):
         for key, label, _ in (*METRICS, *((k, lbl, False) for k, lbl in EXTRA)):
-            out.append(f"\n{label} — {where(p)}")
+            out.append(f"\n{label} — {where(p)} (mean ± sd over the runs)")
             out.append(f"{'method':<8} " + " ".join(f"{'n=' + str(n):>17}" for n in agents))
+            cells = {
+                (m, n): [r[key] for r in groups.get((p, m, n), [])] for m in methods for n in agents
+            }
+            digits = shared_precision([summary(v, ddof=0).mean for v in cells.values() if v])
             for m in methods:
-                cells = []
-                for n in agents:
-                    vals = [r[key] for r in groups.get((p, m, n), [])]
-                    cells.append(f"{_fmt(vals):>17}")
-                out.append(f"{m:<8} " + " ".join(cells))
+                row = [f"{_fmt(cells[m, n], digits):>17}" for n in agents]
+                out.append(f"{m:<8} " + " ".join(row))
         runs = {len(v) for (pp, _, _), v in groups.items() if pp == p}
         incomplete = sum(not r["complete"] for r in records if r["p"] == p)
         out.append(f"(runs per cell: {sorted(runs)}; incomplete runs: {incomplete})")
     return "\n".join(out)
 
 
-def _fmt(vals: list[float]) -> str:
+def _fmt(vals: list[float], digits: int) -> str:
     if not vals:
         return "-"
     s = summary(vals, ddof=0)
-    digits = 0 if abs(s.mean) >= 100 else 2 if abs(s.mean) >= 1 else 4
     return plus_minus(s.mean, s.sd, f".{digits}f")
 
 
