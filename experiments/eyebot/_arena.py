@@ -8,7 +8,10 @@ directions (a square grid's diagonals, at 45°, would not); 2 m is the paper's d
 that leaves one eye-bot towards a neighbour is under it before d runs out (cones of 0.5 m;
 camera discs of 1 m, so neighbours' discs just touch). The target area (1 m radius) is under
 the bottom-left eye-bot, the source area under the top-right one; two walls from opposite sides
-make an S-shaped way between them, and four boxes clutter it.
+make an S-shaped way between them, and five posts clutter it. Four lattice places fall on the
+walls (x = 4 and 8, the second and fourth rows): no eye-bot is hung there (an eye-bot over a
+wall would see and instruct both sides of it), 24 eye-bots in all; the old placement, all 28,
+is ``cluttered(over_walls=True)``.
 
 The double corridor is :func:`sim_hw.continuous.double_corridor` (l_r = 20 m, 1 m wide, rooms
 3 m deep): eye-bots every 2 m along the middle of each corridor, and over the two rooms on a
@@ -69,8 +72,9 @@ class Arena:
         return math.hypot(x - self.target[0], y - self.target[1]) <= AREA
 
 
-def cluttered() -> Arena:
-    """Fig. 1(c), as described in the module docstring."""
+def cluttered(over_walls: bool = False) -> Arena:
+    """Fig. 1(c), as described in the module docstring (``over_walls``: the old placement,
+    eye-bots over the walls kept)."""
     walls = (
         ObstacleSpec("box", center=(4.0, 5.6), size=(0.4, 6.8)),  # from the top, at x = 4
         ObstacleSpec("box", center=(8.0, 3.4), size=(0.4, 6.8)),  # from the bottom, at x = 8
@@ -80,6 +84,8 @@ def cluttered() -> Arena:
         ),
     )
     eyes = _lattice("e", rows=5, columns=6)
+    if not over_walls:
+        eyes = [e for e in eyes if not _inside(walls, e.center)]
     target, source = eyes[0].center, eyes[-1].center
     spec = WorldSpec(
         size=(12.0, 9.0),
@@ -91,6 +97,16 @@ def cluttered() -> Arena:
         ),
     )
     return _with_shortest(Arena(spec, tuple(eyes), source, target))
+
+
+def _inside(obstacles: tuple[ObstacleSpec, ...], p: tuple[float, float]) -> bool:
+    """Whether ``p`` lies on one of the (axis-aligned) boxes among ``obstacles``."""
+    return any(
+        ob.shape == "box"
+        and abs(p[0] - ob.center[0]) <= ob.size[0] / 2
+        and abs(p[1] - ob.center[1]) <= ob.size[1] / 2
+        for ob in obstacles
+    )
 
 
 def _centroid(row: int, i: int) -> tuple[float, float]:
