@@ -62,6 +62,8 @@ class Arena:
     optimum: float = math.nan
     """Length of the shortest way through the eye-bots, from under the target to under the
     source (m)."""
+    mirrored: bool = False
+    """The double corridor mirrored left to right: its shorter corridor is the left one."""
 
     def in_source(self, x: float, y: float) -> bool:
         """Whether (x, y) is in the source area."""
@@ -128,8 +130,10 @@ def _lattice(prefix: str, rows: int, columns: int) -> list[EyeBotSpec]:
     return out
 
 
-def corridors(ratio: float, length: float = 20.0) -> Arena:
-    """Fig. 3: two corridors, the right one ``length`` long, the left one ``ratio`` times."""
+def corridors(ratio: float, length: float = 20.0, mirrored: bool = False) -> Arena:
+    """Fig. 3: two corridors, the right one ``length`` long, the left one ``ratio`` times;
+    ``mirrored``: the same arena mirrored left to right (the shorter corridor on the left), to
+    tell learning the shorter way from a bias to one side."""
     room = 3.0
     base = double_corridor(length=length, ratio=ratio, width=1.0, room=room)
     h = base.size[1]
@@ -153,7 +157,27 @@ def corridors(ratio: float, length: float = 20.0) -> Arena:
             MarkerSpec("target", "target", target, AREA),
         ),
     )
-    return _with_shortest(Arena(spec, tuple(eyes), source, target, (source[0], y0, y1)))
+    arena = Arena(spec, tuple(eyes), source, target, (source[0], y0, y1))
+    return _with_shortest(_mirror(arena) if mirrored else arena)
+
+
+def _mirror(arena: Arena) -> Arena:
+    """``arena`` mirrored about its vertical middle line (x → w − x)."""
+    w = arena.spec.size[0]
+
+    def x(p: tuple[float, float]) -> tuple[float, float]:
+        return (w - p[0], p[1])
+
+    assert arena.corridors is not None
+    divide, y0, y1 = arena.corridors
+    spec = replace(
+        arena.spec,
+        name=f"{arena.spec.name}-mirrored",
+        obstacles=tuple(replace(o, center=x(o.center)) for o in arena.spec.obstacles),
+        markers=tuple(replace(m, center=x(m.center)) for m in arena.spec.markers),
+    )
+    eyes = tuple(replace(e, center=x(e.center)) for e in arena.eyebots)
+    return Arena(spec, eyes, x(arena.source), x(arena.target), (w - divide, y0, y1), mirrored=True)
 
 
 def _along(line: tuple[tuple[float, float], ...], step: float) -> list[tuple[float, float]]:

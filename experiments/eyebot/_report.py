@@ -162,7 +162,8 @@ def fig3(records: Records) -> str:
     """ρ histograms for r = 1, 1.5, 2 (15 foot-bots deployed one every 30 s)."""
     out = [
         f"\nFig. 3, double corridor, {FIG3_FOOTBOTS} foot-bots, one every {DEPLOY_EVERY:g} s:"
-        " fraction of runs by ρ = c_r / (c_r + c_l) over the last 1000 s (right = shorter)",
+        " fraction of runs by ρ = c_r / (c_r + c_l) over the last 1000 s (c_r: the shorter"
+        " corridor, the right one; the left one in a mirrored arena)",
         _header(),
     ]
     shorter = []

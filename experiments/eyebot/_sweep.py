@@ -30,6 +30,8 @@ FIG3_FOOTBOTS = 15
 FIG4_FOOTBOTS = (1, 5, 10, 15, 20, 25, 30)
 FIG5_FOOTBOTS = (10, 20, 30)
 BEYOND_FOOTBOTS = (20, 30)
+MIRRORED = "-mirrored"
+"""The suffix of a mirrored double corridor's name (Fig. 3)."""
 DEPLOY_EVERY = 30.0
 """Fig. 3-5: one foot-bot deployed every 30 s."""
 
@@ -95,8 +97,12 @@ def points(figure: str) -> list[Point]:
         return [
             Point("cluttered", n, way) for n in FIG2_FOOTBOTS for way in ("learning", "shortest")
         ]
-    if figure == "fig3":
-        return [Point(_corridor(r), FIG3_FOOTBOTS, deploy_every=DEPLOY_EVERY) for r in FIG3_RATIOS]
+    if figure == "fig3":  # and each ratio mirrored (the shorter corridor on the left)
+        return [
+            Point(_corridor(r) + mirror, FIG3_FOOTBOTS, deploy_every=DEPLOY_EVERY)
+            for mirror in ("", MIRRORED)
+            for r in FIG3_RATIOS
+        ]
     if figure in ("fig4", "fig5"):
         counts = FIG4_FOOTBOTS if figure == "fig4" else FIG5_FOOTBOTS
         return [Point(_corridor(1.0), n, deploy_every=DEPLOY_EVERY) for n in counts]
@@ -119,7 +125,8 @@ def arena(name: str, over_walls: bool = False) -> Arena:
     if name == "cluttered":
         return cluttered(over_walls)
     if name.startswith("corridor-r"):
-        return corridors(float(name.removeprefix("corridor-r")))
+        ratio = name.removeprefix("corridor-r").removesuffix(MIRRORED)
+        return corridors(float(ratio), mirrored=name.endswith(MIRRORED))
     raise ValueError(f"unknown arena {name!r}")
 
 

@@ -16,7 +16,8 @@ target; ``t_a`` the mean duration of the trips between source and target after e
 first one (the first is exploration from the start; counting it too is ``t_a_all``;
 ``t_a_late`` counts only those begun in the run's second half); for the
 double corridor, over the last ``window`` seconds, how many foot-bots are in the right corridor
-and in the left one at each tick, and ρ = c_r / (c_r + c_l).
+and in the left one at each tick, and ρ = c_r / (c_r + c_l) (in the mirrored arena c_r counts
+the shorter corridor, on the left there, so that ρ is always the shorter corridor's share).
 """
 
 from __future__ import annotations
@@ -208,8 +209,8 @@ def _count(arena: Arena, world: World, feet: dict[str, FootBot], counts: list[in
     divide, y0, y1 = arena.corridors
     for rid in feet:
         x, y, _ = world.pose(rid)
-        if y0 < y < y1:
-            counts[0 if x > divide else 1] += 1
+        if y0 < y < y1:  # mirrored: the shorter corridor, counted first, is the left one
+            counts[0 if (x > divide) != arena.mirrored else 1] += 1
 
 
 def _figures(
