@@ -99,7 +99,7 @@ def fig2_counted(records: Records) -> str:
         out.append(
             f"{n:>9} {len(learn):>4} {t1:6.0f} {ta:6.0f} {none:>4} {late:6.0f} {none_late:>4}"
             f" {med:6.0f} {ts:5.0f} {ta / ts:7.2f} {late / ts:8.2f} {med / ts:7.2f}"
-            f"  {_yes(ta <= 2 * ts):>9}  {_yes(med <= 1.5 * ts):>11}  {_yes(ta < t1):>7}"
+            f"  {_yes(ta, 2 * ts):>9}  {_yes(med, 1.5 * ts):>11}  {_yes(ta, t1, strict=True):>7}"
         )
     out.append(
         "(median: the median of a run's later trips, its mean over the runs; late: later trips"
@@ -114,8 +114,11 @@ def _counted(values: Sequence[float | None], instead: Sequence[float]) -> float:
     return float(np.mean(got)) if got else math.nan
 
 
-def _yes(ok: bool) -> str:
-    return "yes" if ok else "no"
+def _yes(value: float, bound: float, strict: bool = False) -> str:
+    """Whether ``value`` is within ``bound`` (below it, if ``strict``); "-" if either is nan."""
+    if math.isnan(value) or math.isnan(bound):
+        return "-"
+    return "yes" if (value < bound if strict else value <= bound) else "no"
 
 
 def histogram(values: Sequence[float]) -> list[float]:

@@ -28,3 +28,9 @@ def test_a_run_without_a_trip_counts_as_the_span_it_had() -> None:
     assert cells[:9] == ["10", "2", "1600", "1550", "1", "795", "1", "1550", "100"]
     assert cells[9:12] == ["15.50", "7.95", "15.50"]
     assert cells[12:] == ["no", "no", "yes"]
+
+
+def test_without_t_s_runs_the_bounds_are_not_decided() -> None:
+    table = fig2_counted([_learn(200.0, 100.0, 90.0)])
+    row = next(line for line in table.splitlines() if line.split()[:1] == ["10"])
+    assert row.split()[-3:] == ["-", "-", "yes"]
