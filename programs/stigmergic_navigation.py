@@ -33,6 +33,7 @@ from robots.stigmergic import (
     Goal,
     Learning,
     Motion,
+    Reading,
     eyebot_loop,
     footbot_loop,
     travel_times,
@@ -48,19 +49,22 @@ async def stigmergic_navigation(
     robot: Robot[Any],
     team: RunTeam,
     duration: float = 300.0,
-    period: float = 1.0,
+    period: float = 0.1,
     c_a: float = 0.5,
     c_m: float = 0.99,
     q: float = 0.5,
     d: float = 2.0,
     speed: float = 0.3,
+    theta_f: str = "approaching",
 ) -> dict[str, Any]:
     """Navigate (foot-bots) and learn (eye-bots) for ``duration`` simulated seconds.
 
-    ``period`` is the eye-bots' time step, ``c_a``, ``c_m``, ``q`` their learning (eq. 1; the
-    paper's section 5), ``d`` and ``speed`` the foot-bots' leg length and speed. Returns the
-    team's figures (``t_1``, ``t_a``, ``t_a_all``, ``trips``, seconds after the start; ``lost``
-    the members gone before the end) and this
+    ``period`` is the eye-bots' time step (0.1 s: the simulator's control step; the old reading
+    was 1 s), ``theta_f`` which foot-bots they learn θ_f from (``approaching``: those coming
+    towards them; ``any``: the old reading, leaving ones too), ``c_a``, ``c_m``, ``q`` their
+    learning (eq. 1; the paper's section 5), ``d`` and ``speed`` the foot-bots' leg length and
+    speed. Returns the team's figures (``t_1``, ``t_a``, ``t_a_all``, ``trips``, seconds after
+    the start; ``lost`` the members gone before the end) and this
     member's own result (``me``: an eye-bot's policies, a foot-bot's trips as
     ``[goal, start, end]`` in simulated seconds).
     """
@@ -74,7 +78,7 @@ async def stigmergic_navigation(
 
     async def navigate() -> dict[str, Any]:
         if isinstance(hw, EyeBotHardware):
-            eyebot = EyeBot(rng, Learning(c_a=c_a, c_m=c_m, q=q))
+            eyebot = EyeBot(rng, Learning(c_a=c_a, c_m=c_m, q=q), reading=Reading(theta_f))
             done = await eyebot_loop(hw, eyebot, period, until)
             for policy in ("to_source", "to_target"):  # shorter lines in a report
                 done[policy] = [round(p, 4) for p in done[policy]]

@@ -8,7 +8,10 @@ directions (a square grid's diagonals, at 45°, would not); 2 m is the paper's d
 that leaves one eye-bot towards a neighbour is under it before d runs out (cones of 0.5 m;
 camera discs of 1 m, so neighbours' discs just touch). The target area (1 m radius) is under
 the bottom-left eye-bot, the source area under the top-right one; two walls from opposite sides
-make an S-shaped way between them, and four boxes clutter it.
+make an S-shaped way between them, and five posts clutter it. Four lattice places fall on the
+walls (x = 4 and 8, the second and fourth rows): no eye-bot is hung there (an eye-bot over a
+wall would see and instruct both sides of it), 24 eye-bots in all; the old placement, all 28,
+is ``cluttered(over_walls=True)``.
 
 The double corridor is :func:`sim_hw.continuous.double_corridor` (l_r = 20 m, 1 m wide, rooms
 3 m deep): eye-bots every 2 m along the middle of each corridor, and over the two rooms on a
@@ -59,6 +62,8 @@ class Arena:
     optimum: float = math.nan
     """Length of the shortest way through the eye-bots, from under the target to under the
     source (m)."""
+    mirrored: bool = False
+    """The double corridor mirrored left to right: its shorter corridor is the left one."""
 
     def in_source(self, x: float, y: float) -> bool:
         """Whether (x, y) is in the source area."""
@@ -69,8 +74,9 @@ class Arena:
         return math.hypot(x - self.target[0], y - self.target[1]) <= AREA
 
 
-def cluttered() -> Arena:
-    """Fig. 1(c), as described in the module docstring."""
+def cluttered(over_walls: bool = False) -> Arena:
+    """Fig. 1(c), as described in the module docstring (``over_walls``: the old placement,
+    eye-bots over the walls kept)."""
     walls = (
         ObstacleSpec("box", center=(4.0, 5.6), size=(0.4, 6.8)),  # from the top, at x = 4
         ObstacleSpec("box", center=(8.0, 3.4), size=(0.4, 6.8)),  # from the bottom, at x = 8
@@ -80,6 +86,8 @@ def cluttered() -> Arena:
         ),
     )
     eyes = _lattice("e", rows=5, columns=6)
+    if not over_walls:
+        eyes = [e for e in eyes if not _inside(walls, e.center)]
     target, source = eyes[0].center, eyes[-1].center
     spec = WorldSpec(
         size=(12.0, 9.0),
@@ -91,6 +99,16 @@ def cluttered() -> Arena:
         ),
     )
     return _with_shortest(Arena(spec, tuple(eyes), source, target))
+
+
+def _inside(obstacles: tuple[ObstacleSpec, ...], p: tuple[float, float]) -> bool:
+    """Whether ``p`` lies on one of the (axis-aligned) boxes among ``obstacles``."""
+    return any(
+        ob.shape == "box"
+        and abs(p[0] - ob.center[0]) <= ob.size[0] / 2
+        and abs(p[1] - ob.center[1]) <= ob.size[1] / 2
+        for ob in obstacles
+    )
 
 
 def _centroid(row: int, i: int) -> tuple[float, float]:
@@ -112,8 +130,10 @@ def _lattice(prefix: str, rows: int, columns: int) -> list[EyeBotSpec]:
     return out
 
 
-def corridors(ratio: float, length: float = 20.0) -> Arena:
-    """Fig. 3: two corridors, the right one ``length`` long, the left one ``ratio`` times."""
+def corridors(ratio: float, length: float = 20.0, mirrored: bool = False) -> Arena:
+    """Fig. 3: two corridors, the right one ``length`` long, the left one ``ratio`` times;
+    ``mirrored``: the same arena mirrored left to right (the shorter corridor on the left), to
+    tell learning the shorter way from a bias to one side."""
     room = 3.0
     base = double_corridor(length=length, ratio=ratio, width=1.0, room=room)
     h = base.size[1]
@@ -137,7 +157,27 @@ def corridors(ratio: float, length: float = 20.0) -> Arena:
             MarkerSpec("target", "target", target, AREA),
         ),
     )
-    return _with_shortest(Arena(spec, tuple(eyes), source, target, (source[0], y0, y1)))
+    arena = Arena(spec, tuple(eyes), source, target, (source[0], y0, y1))
+    return _with_shortest(_mirror(arena) if mirrored else arena)
+
+
+def _mirror(arena: Arena) -> Arena:
+    """``arena`` mirrored about its vertical middle line (x → w − x)."""
+    w = arena.spec.size[0]
+
+    def x(p: tuple[float, float]) -> tuple[float, float]:
+        return (w - p[0], p[1])
+
+    assert arena.corridors is not None
+    divide, y0, y1 = arena.corridors
+    spec = replace(
+        arena.spec,
+        name=f"{arena.spec.name}-mirrored",
+        obstacles=tuple(replace(o, center=x(o.center)) for o in arena.spec.obstacles),
+        markers=tuple(replace(m, center=x(m.center)) for m in arena.spec.markers),
+    )
+    eyes = tuple(replace(e, center=x(e.center)) for e in arena.eyebots)
+    return Arena(spec, eyes, x(arena.source), x(arena.target), (w - divide, y0, y1), mirrored=True)
 
 
 def _along(line: tuple[tuple[float, float], ...], step: float) -> list[tuple[float, float]]:

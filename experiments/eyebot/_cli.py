@@ -6,8 +6,11 @@ import argparse
 import json
 import math
 import time
+from dataclasses import replace
 
 from mover.cli import UsageError
+from robots.stigmergic import Reading
+from sim_hw.continuous import TICK
 
 from .._common import add_run_arguments, comma_list, read_run_arguments, runner_parser
 from .._figures import add_figure_arguments
@@ -47,6 +50,49 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         help="report the saved runs of --seed only (at most --runs a point), making none; "
         "without --seed, list the seeds saved",
     )
+    parser.add_argument(
+        "--footbots",
+        type=comma_list(int),
+        default=[],
+        help="comma list: only the points with these numbers of foot-bots (default all)",
+    )
+    parser.add_argument(
+        "--ways",
+        type=comma_list(str, ("learning", "shortest", "weigh")),
+        default=[],
+        help="comma list of learning, shortest, weigh: only the points where the eye-bots work"
+        " so (default all)",
+    )
+    old = parser.add_argument_group(
+        "old readings of the paper (each kept as an option; runs saved apart, the save folder's"
+        " name gets what differs from the defaults)"
+    )
+    old.add_argument(
+        "--eyebot-period",
+        type=float,
+        default=TICK,
+        help=f"seconds between two eye-bot steps (default {TICK:g}, the simulator's control"
+        " step; the old reading: 1)",
+    )
+    old.add_argument(
+        "--theta-f",
+        choices=[r.value for r in Reading],
+        default=Reading.APPROACHING.value,
+        help="which foot-bots an eye-bot learns θ_f from: approaching (default: those coming"
+        " towards it) or any (the old reading: every one in view, leaving ones too)",
+    )
+    old.add_argument(
+        "--head-on",
+        choices=["random", "right"],
+        default="random",
+        help="which way a foot-bot passes an obstacle straight ahead: random (default, a seeded"
+        " coin) or right (the old rule)",
+    )
+    old.add_argument(
+        "--eyebots-over-walls",
+        action="store_true",
+        help="the old cluttered arena: 28 eye-bots, 4 of them over its walls (default 24)",
+    )
     add_saved_arguments(parser, "eyebot")
     add_figure_arguments(parser)
     parser.set_defaults(func=run)
@@ -61,11 +107,24 @@ def settings(args: argparse.Namespace) -> EyebotSettings:
     save = None if args.no_save else args.save
     if args.saved and save is None:
         raise UsageError("--saved reports the saved runs: it cannot go with --no-save")
+    if not (math.isfinite(args.eyebot_period) and TICK - 1e-9 <= args.eyebot_period <= 60.0):
+        raise UsageError(f"--eyebot-period must be from {TICK:g} to 60 s, got {args.eyebot_period}")
     if save is not None and args.duration != 3000.0:  # runs of other lengths are kept apart
         save = save.with_name(f"{save.name}-duration={args.duration:g}")
-    return EyebotSettings(
+    s = EyebotSettings(
         seed=given.seed,
         runs=args.runs,
+        period=args.eyebot_period,
+        reading=Reading(args.theta_f),
+        head_on_right=args.head_on == "right",
+        over_walls=args.eyebots_over_walls,
+        footbots=tuple(args.footbots),
+        ways=tuple(args.ways),
+    )
+    if save is not None and s.old():  # runs under old readings are kept apart too
+        save = save.with_name(f"{save.name}-{'-'.join(s.old())}")
+    return replace(
+        s,
         figures=tuple(args.figure),
         duration=args.duration,
         workers=given.workers,
@@ -84,6 +143,7 @@ def run(args: argparse.Namespace) -> int:
         return 0
     print(f"seed: {s.seed}")
     print(f"figures: {','.join(s.figures)}  runs per point: {s.runs}  duration: {s.duration:g} s")
+    print(f"readings: {', '.join(s.old()) or 'the new defaults'}")
     if s.save is not None:
         print(f"runs saved in: {s.save}")
     if s.saved_only:
@@ -91,9 +151,14 @@ def run(args: argparse.Namespace) -> int:
     everything = []
     for figure in s.figures:
         t0 = time.monotonic()
-        records, fresh, wall = run_points(s, points(figure), figure)
+        pts = s.chosen(points(figure))
+        if not pts:
+            raise UsageError(f"{figure} has no point with these --footbots and --ways")
+        records, fresh, wall = run_points(s, pts, figure)
         everything.extend(records)
         print(_TABLES[figure](records))
+        if figure == "fig2":
+            print(_report.fig2_counted(records))
         print(f"{figure}: {len(fresh)} runs made in {time.monotonic() - t0:.0f} s wall")
         if fresh:
             print(_report.speed(fresh, wall))

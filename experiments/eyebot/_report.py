@@ -66,6 +66,61 @@ def fig2(records: Records) -> str:
     return "\n".join(out)
 
 
+def fig2_counted(records: Records) -> str:
+    """Fig. 2's t_a two ways, every run counted, against the must-show bounds.
+
+    ``t_a``: every trip after a foot-bot's first, over the whole run (learning included);
+    ``late``: only those begun in the run's second half. A run with no such trip is not left
+    out: it counts as the span it had for one (the run's length for ``t_a``, half of it for
+    ``late``: a trip that never ended took at least about that), and how many did so is shown
+    (``none``). t_1 likewise counts a run that never reached the target as the run's length.
+    Every ratio is of means over the runs; t_s is the mean trip with pre-programmed eye-bots.
+    """
+    out = [
+        "\nFig. 2, every run counted (a run with no trip to count is counted as the span it"
+        " had: t_a the run's length, late half of it, t_1 the run's length), means over the runs",
+        f"{'foot-bots':>9} {'runs':>4} {'t_1':>6} {'t_a':>6} {'none':>4} {'late':>6} {'none':>4}"
+        f" {'median':>6} {'t_s':>5} {'t_a/t_s':>7} {'late/t_s':>8} {'med/t_s':>7}"
+        "  t_a<=2t_s  med<=1.5t_s  t_a<t_1",
+    ]
+    for n in sorted({r["footbots"] for r in _of(records, arena="eyebot-cluttered")}):
+        learn = _of(records, arena="eyebot-cluttered", footbots=n, eyebots="learning")
+        short = _of(records, arena="eyebot-cluttered", footbots=n, eyebots="shortest")
+        if not learn:
+            continue
+        length = [float(r["duration"]) for r in learn]
+        t1 = _counted([r["t_1"] for r in learn], length)
+        ta = _counted([r["t_a"] for r in learn], length)
+        late = _counted([r.get("t_a_late") for r in learn], [d / 2 for d in length])
+        med = _counted([r.get("t_a_median") for r in learn], length)
+        ts = _mean([r["t_a_all"] for r in short])
+        none = sum(r["t_a"] is None for r in learn)
+        none_late = sum(r.get("t_a_late") is None for r in learn)
+        out.append(
+            f"{n:>9} {len(learn):>4} {t1:6.0f} {ta:6.0f} {none:>4} {late:6.0f} {none_late:>4}"
+            f" {med:6.0f} {ts:5.0f} {ta / ts:7.2f} {late / ts:8.2f} {med / ts:7.2f}"
+            f"  {_yes(ta, 2 * ts):>9}  {_yes(med, 1.5 * ts):>11}  {_yes(ta, t1, strict=True):>7}"
+        )
+    out.append(
+        "(median: the median of a run's later trips, its mean over the runs; late: later trips"
+        " begun in the run's second half; a ratio with no t_s runs is nan)"
+    )
+    return "\n".join(out)
+
+
+def _counted(values: Sequence[float | None], instead: Sequence[float]) -> float:
+    """The mean of ``values``, a missing one counted as its ``instead``."""
+    got = [float(v) if v is not None else alt for v, alt in zip(values, instead, strict=True)]
+    return float(np.mean(got)) if got else math.nan
+
+
+def _yes(value: float, bound: float, strict: bool = False) -> str:
+    """Whether ``value`` is within ``bound`` (below it, if ``strict``); "-" if either is nan."""
+    if math.isnan(value) or math.isnan(bound):
+        return "-"
+    return "yes" if (value < bound if strict else value <= bound) else "no"
+
+
 def histogram(values: Sequence[float]) -> list[float]:
     """Fractions of ``values`` (ρ) in the five intervals [0, 0.2), …, [0.8, 1]."""
     if not values:
@@ -110,7 +165,8 @@ def fig3(records: Records) -> str:
     """ρ histograms for r = 1, 1.5, 2 (15 foot-bots deployed one every 30 s)."""
     out = [
         f"\nFig. 3, double corridor, {FIG3_FOOTBOTS} foot-bots, one every {DEPLOY_EVERY:g} s:"
-        " fraction of runs by ρ = c_r / (c_r + c_l) over the last 1000 s (right = shorter)",
+        " fraction of runs by ρ = c_r / (c_r + c_l) over the last 1000 s (c_r: the shorter"
+        " corridor, the right one; the left one in a mirrored arena)",
         _header(),
     ]
     shorter = []

@@ -15,6 +15,9 @@ from pathlib import Path
 
 import numpy as np
 
+from robots.stigmergic import Motion, Reading
+from sim_hw.continuous import TICK
+
 from .._common import Progress
 from .._saved import Executor, Record, load_runs, run_pool
 from ._arena import Arena, cluttered, corridors
@@ -27,6 +30,8 @@ FIG3_FOOTBOTS = 15
 FIG4_FOOTBOTS = (1, 5, 10, 15, 20, 25, 30)
 FIG5_FOOTBOTS = (10, 20, 30)
 BEYOND_FOOTBOTS = (20, 30)
+MIRRORED = "-mirrored"
+"""The suffix of a mirrored double corridor's name (Fig. 3)."""
 DEPLOY_EVERY = 30.0
 """Fig. 3-5: one foot-bot deployed every 30 s."""
 
@@ -60,6 +65,30 @@ class EyebotSettings:
     save: Path | None = None
     progress: bool = True
     saved_only: bool = False  # report the saved runs, make none
+    period: float = TICK  # the eye-bots' step (the old reading: 1 s)
+    reading: Reading = Reading.APPROACHING  # which foot-bots give θ_f (old: Reading.ANY)
+    head_on_right: bool = False  # the old avoidance: straight ahead always passed right
+    over_walls: bool = False  # the old cluttered arena: eye-bots over its walls too
+    footbots: tuple[int, ...] = ()  # only these numbers of foot-bots (all: empty)
+    ways: tuple[str, ...] = ()  # only these ways of the eye-bots (all: empty)
+
+    def old(self) -> list[str]:
+        """The old readings asked for, as ``name=value`` (none: the new defaults)."""
+        return [
+            *([f"period={self.period:g}"] if self.period != TICK else []),
+            *([f"reading={self.reading.value}"] if self.reading is not Reading.APPROACHING else []),
+            *(["head-on=right"] if self.head_on_right else []),
+            *(["over-walls"] if self.over_walls else []),
+        ]
+
+    def chosen(self, pts: list[Point]) -> list[Point]:
+        """``pts`` narrowed to :attr:`footbots` and :attr:`ways`."""
+        return [
+            p
+            for p in pts
+            if (not self.footbots or p.footbots in self.footbots)
+            and (not self.ways or p.eyebots in self.ways)
+        ]
 
 
 def points(figure: str) -> list[Point]:
@@ -68,8 +97,12 @@ def points(figure: str) -> list[Point]:
         return [
             Point("cluttered", n, way) for n in FIG2_FOOTBOTS for way in ("learning", "shortest")
         ]
-    if figure == "fig3":
-        return [Point(_corridor(r), FIG3_FOOTBOTS, deploy_every=DEPLOY_EVERY) for r in FIG3_RATIOS]
+    if figure == "fig3":  # and each ratio mirrored (the shorter corridor on the left)
+        return [
+            Point(_corridor(r) + mirror, FIG3_FOOTBOTS, deploy_every=DEPLOY_EVERY)
+            for mirror in ("", MIRRORED)
+            for r in FIG3_RATIOS
+        ]
     if figure in ("fig4", "fig5"):
         counts = FIG4_FOOTBOTS if figure == "fig4" else FIG5_FOOTBOTS
         return [Point(_corridor(1.0), n, deploy_every=DEPLOY_EVERY) for n in counts]
@@ -87,12 +120,13 @@ def _corridor(ratio: float) -> str:
 
 
 @functools.cache
-def arena(name: str) -> Arena:
-    """The arena a point names."""
+def arena(name: str, over_walls: bool = False) -> Arena:
+    """The arena a point names (``over_walls``: the cluttered one's old eye-bot placement)."""
     if name == "cluttered":
-        return cluttered()
+        return cluttered(over_walls)
     if name.startswith("corridor-r"):
-        return corridors(float(name.removeprefix("corridor-r")))
+        ratio = name.removeprefix("corridor-r").removesuffix(MIRRORED)
+        return corridors(float(ratio), mirrored=name.endswith(MIRRORED))
     raise ValueError(f"unknown arena {name!r}")
 
 
@@ -103,19 +137,22 @@ def run_seed(master: int, run_index: int) -> int:
 
 def _one(job: tuple[EyebotSettings, Point, int]) -> Record:
     s, p, k = job
-    a = arena(p.arena)
+    a = arena(p.arena, s.over_walls)
     settings = Settings(
         footbots=p.footbots,
         duration=s.duration,
         deploy_every=p.deploy_every,
         shortest=p.eyebots == "shortest",
         weigh=p.eyebots == "weigh",
+        period=s.period,
+        reading=s.reading,
         window=min(1000.0, s.duration / 3),
+        motion=Motion(head_on_right=s.head_on_right),
     )
     if settings.weigh:  # the reference trip: the shortest way through the eye-bots
         settings = replace(settings, weigh_reference=a.optimum / settings.motion.speed)
     rec = run(a, settings, run_seed(s.seed, k))
-    rec.update(point=p.name, eyebots=p.eyebots, run=k, seed=s.seed)
+    rec.update(point=p.name, eyebots=p.eyebots, run=k, seed=s.seed, over_walls=s.over_walls)
     return rec
 
 

@@ -1,19 +1,23 @@
 """One seeded run of stigmergic navigation in-process: eye-bots, foot-bots, the pymunk world.
 
-Each tick (0.1 s of simulated time) the ceiling layer (:class:`sim_hw.continuous.Ceiling`) gives
-the devices between the two kinds of robot; each foot-bot's :class:`robots.stigmergic.FootBot`
-gets its odometry, its proximity ring (an 8-ray range sensor out to ``PROXIMITY`` m; the nearest
-obstacle within ±90° of its heading and closer than ``AVOID`` m to its rim is avoided), the
-instruction of the eye-bot above it, the eye-bots its omnidirectional camera sees, and whether
-it is in the source or the target area; its wheel speeds and LEDs go back to the world. Every
-``Settings.period`` seconds each eye-bot learns from the foot-bots in its view and draws a new
-instruction.
+Each tick (0.1 s of simulated time, the simulator's control step) the ceiling layer
+(:class:`sim_hw.continuous.Ceiling`) gives the devices between the two kinds of robot; each
+foot-bot's :class:`robots.stigmergic.FootBot` gets its odometry, its proximity ring (an 8-ray
+range sensor out to ``PROXIMITY`` m; the nearest obstacle within ±90° of its heading and
+closer than ``AVOID`` m to its rim is avoided), the instruction of the eye-bot above it, the
+eye-bots its omnidirectional camera sees, and whether it is in the source or the target area;
+its wheel speeds and LEDs go back to the world. Every
+``Settings.period`` seconds (by default every tick: the paper's eye-bots act at the simulator's
+discrete step; the old reading was 1 s) each eye-bot learns from the foot-bots in its view and
+draws a new instruction.
 
 Measured, as the paper does (section 5): ``t_1`` the time until the first foot-bot reaches the
 target; ``t_a`` the mean duration of the trips between source and target after each foot-bot's
-first one (the first is exploration from the start; counting it too is ``t_a_all``); for the
+first one (the first is exploration from the start; counting it too is ``t_a_all``;
+``t_a_late`` counts only those begun in the run's second half); for the
 double corridor, over the last ``window`` seconds, how many foot-bots are in the right corridor
-and in the left one at each tick, and ρ = c_r / (c_r + c_l).
+and in the left one at each tick, and ρ = c_r / (c_r + c_l) (in the mirrored arena c_r counts
+the shorter corridor, on the left there, so that ρ is always the shorter corridor's share).
 """
 
 from __future__ import annotations
@@ -35,6 +39,7 @@ from robots.stigmergic import (
     Instruction,
     Learning,
     Motion,
+    Reading,
     footbot_seen,
     obstacle_bearing,
     show_leds,
@@ -72,7 +77,8 @@ class Settings:
     shortest: bool = False
     weigh: bool = False
     weigh_reference: float = 60.0
-    period: float = 1.0
+    period: float = TICK
+    reading: Reading = Reading.APPROACHING
     window: float = 1000.0
     learning: Learning = field(default_factory=Learning)
     motion: Motion = field(default_factory=Motion)
@@ -86,7 +92,7 @@ def run(arena: Arena, settings: Settings, seed: int) -> dict[str, Any]:
     rng = np.random.SeedSequence([seed])
     eye_seq, foot_seq, place_seq = rng.spawn(3)
     eyes = {
-        e.id: EyeBot(np.random.default_rng(s), settings.learning)
+        e.id: EyeBot(np.random.default_rng(s), settings.learning, reading=settings.reading)
         for e, s in zip(arena.eyebots, eye_seq.spawn(len(arena.eyebots)), strict=True)
     }
     if settings.shortest:
@@ -114,9 +120,16 @@ def run(arena: Arena, settings: Settings, seed: int) -> dict[str, Any]:
             due = deploy == 0
         ceiling.sense()
         if tick % period == 0:
+            # at one tick a step, an instruction nobody is under now is never heard: it is not
+            # drawn (the draws that are heard are distributed the same; a third less work)
+            heard = _under(ceiling, feet) if period == 1 else None
             for eid, eye in eyes.items():
                 seen = [_seen(b, started, world.time, settings) for b in ceiling.camera(eid)]
-                instructions[eid] = eye.step(seen)
+                if heard is None or eid in heard:
+                    instructions[eid] = eye.step(seen)
+                else:
+                    eye.observe(seen)
+                    instructions.pop(eid, None)
         for rid, bot in feet.items():
             goal = bot.goal
             command = bot.step(_perceive(arena, world, ceiling, rid, instructions))
@@ -148,6 +161,11 @@ def _start(arena: Arena, world: World, rng: np.random.Generator) -> RobotSpec:
             heading = float(rng.uniform(-math.pi, math.pi))
             return replace(FOOT, pose=(x, y, heading))
     raise RuntimeError("no free place in the source area")
+
+
+def _under(ceiling: Ceiling, feet: dict[str, FootBot]) -> set[str]:
+    """The eye-bots some foot-bot is under (in the cone of) now."""
+    return {a[0] for r in feet if (a := ceiling.above(r)) is not None}
 
 
 def _seen(below: Any, started: dict[str, float], now: float, settings: Settings) -> FootBotSeen:
@@ -191,8 +209,8 @@ def _count(arena: Arena, world: World, feet: dict[str, FootBot], counts: list[in
     divide, y0, y1 = arena.corridors
     for rid in feet:
         x, y, _ = world.pose(rid)
-        if y0 < y < y1:
-            counts[0 if x > divide else 1] += 1
+        if y0 < y < y1:  # mirrored: the shorter corridor, counted first, is the left one
+            counts[0 if (x > divide) != arena.mirrored else 1] += 1
 
 
 def _figures(
@@ -206,7 +224,7 @@ def _figures(
     by_robot: dict[str, list[list[Any]]] = {}
     for trip in trips:
         by_robot.setdefault(trip["robot"], []).append([trip["to"], trip["start"], trip["end"]])
-    times = travel_times(by_robot, 0.0)
+    times = travel_times(by_robot, 0.0, settings.duration)
     total = counts[0] + counts[1]
     return {
         "arena": arena.spec.name,
@@ -215,11 +233,17 @@ def _figures(
         "shortest": settings.shortest,
         "weigh": settings.weigh,
         "duration": settings.duration,
+        "period": settings.period,
+        "reading": settings.reading.value,
+        "head_on_right": settings.motion.head_on_right,
         "t_1": times["t_1"],
         "t_a": times["t_a"],
         "t_a_median": times["t_a_median"],
         "t_a_all": times["t_a_all"],
+        "t_a_late": times["t_a_late"],
         "trips": times["trips"],
+        "later": times["later"],
+        "late": times["late"],
         "c_r": counts[0],
         "c_l": counts[1],
         "rho": counts[0] / total if total else None,

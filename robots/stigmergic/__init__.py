@@ -14,7 +14,14 @@ protocols of its devices, no ground truth) and a loop that drives its behaviour 
 (:func:`eyebot_loop`, :func:`footbot_loop`).
 """
 
-from robots.stigmergic._eyebot import EyeBot, FootBotSeen, Goal, Instruction, trip_weight
+from robots.stigmergic._eyebot import (
+    EyeBot,
+    FootBotSeen,
+    Goal,
+    Instruction,
+    Reading,
+    trip_weight,
+)
 from robots.stigmergic._footbot import FootBot, FootCommand, FootPerception, Heard, Mode, Motion
 from robots.stigmergic._hal import (
     AreaSensor,
@@ -73,6 +80,7 @@ __all__ = [
     "Motion",
     "OmniCamera",
     "Policy",
+    "Reading",
     "Spot",
     "Trip",
     "UpCamera",

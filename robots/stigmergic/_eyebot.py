@@ -7,7 +7,13 @@ if it is on, and its colour) and updates its two policies (eq. 1):
 * a foot-bot going to the target comes from the source: ``P_s`` up and ``P_t`` down for the
   direction θ_f it comes from (and the other way round for one going to the source). θ_f is read
   off the two LEDs: the foot-bot moves from its beacon towards its front LED, so it comes from
-  the opposite direction;
+  the opposite direction. Only a foot-bot *coming towards* the eye-bot counts (sections
+  4.1–4.2: θ_f is where it comes from); read from the view: its heading (beacon to front LED)
+  is within ``APPROACH`` (±π/2) of the bearing from its beacon to the middle of the view, i.e.
+  its distance to the eye-bot is shrinking. One seen within ``CENTRE`` of the middle has no
+  such bearing and counts for nothing. A foot-bot leaving after an instruction would show the
+  eye-bot its own instruction reflected (an echo); the old reading, every foot-bot in view
+  approaching or leaving, is ``EyeBot(reading=Reading.ANY)``;
 * a foot-bot avoiding an obstacle (its beacon's colour says so) marks the direction where it is
   seen as blocked: both policies down there.
 
@@ -33,6 +39,21 @@ import numpy as np
 from robots.library._geometry import Point
 
 from ._policy import Learning, Policy, direction_angle, direction_index
+
+APPROACH = math.pi / 2
+"""A foot-bot comes towards the eye-bot when its heading is within this angle of the bearing
+from it to the middle of the view (π/2: its distance to the eye-bot is shrinking)."""
+CENTRE = 0.05
+"""A foot-bot whose beacon is this close to the middle of the view (m) is neither coming nor
+going."""
+
+
+class Reading(enum.Enum):
+    """Which foot-bots in view give a θ_f: those coming towards the eye-bot (the paper's
+    reading, the default) or every one with its front LED on (the old reading)."""
+
+    APPROACHING = "approaching"
+    ANY = "any"
 
 
 class Goal(enum.Enum):
@@ -68,6 +89,16 @@ class FootBotSeen:
         heading = math.atan2(self.front[1] - self.beacon[1], self.front[0] - self.beacon[0])
         return heading + math.pi
 
+    def coming_towards(self, within: float = APPROACH) -> bool:
+        """Whether it is coming towards the eye-bot: its front LED on, its heading within
+        ``within`` of the bearing from its beacon to the middle of the view, and its beacon
+        not within :data:`CENTRE` of that middle."""
+        if self.front is None or math.hypot(*self.beacon) < CENTRE:
+            return False
+        heading = math.atan2(self.front[1] - self.beacon[1], self.front[0] - self.beacon[0])
+        inward = math.atan2(-self.beacon[1], -self.beacon[0])
+        return abs(math.remainder(heading - inward, 2.0 * math.pi)) < within
+
     def seen_at(self) -> float:
         """The direction in which it is seen."""
         return math.atan2(self.beacon[1], self.beacon[0])
@@ -94,6 +125,7 @@ class EyeBot:
     to_source: Policy = field(default_factory=Policy)
     to_target: Policy = field(default_factory=Policy)
     frozen: bool = False  # pre-programmed (:meth:`show_shortest`): observations change nothing
+    reading: Reading = Reading.APPROACHING
 
     def step(self, seen: Sequence[FootBotSeen]) -> Instruction:
         """One time step: learn from the foot-bots in view, then draw the instruction."""
@@ -113,6 +145,8 @@ class EyeBot:
                 continue
             came_from = foot.came_from()
             if came_from is None or foot.goal is None:
+                continue
+            if self.reading is Reading.APPROACHING and not foot.coming_towards():
                 continue
             i = direction_index(came_from)
             towards, away = (

@@ -34,7 +34,10 @@ Choices the paper leaves open, taken here:
   obstacle within ±π/2 of its heading (closer than the proximity threshold) the foot-bot turns
   away from it, the same way until it is clear (turning towards whichever side is freer at
   each step makes it rock in front of a wall for ever), and then drives ``escape`` metres
-  straight on before it turns back to its way. An obstacle behind it is not avoided.
+  straight on before it turns back to its way. An obstacle behind it is not avoided. One
+  straight ahead (a head-on contact) is passed on a side drawn by a seeded coin, so that the
+  rule is the same under mirroring; the old rule, always to the right (a bias that favours
+  one of two mirrored ways), is ``Motion(head_on_right=True)``.
 """
 
 from __future__ import annotations
@@ -115,6 +118,11 @@ class Motion:
     same_eyebot: float = 1.0
     escape: float = 0.3  # metres driven straight on once an obstacle is no longer ahead
     dt: float = 0.1  # seconds between two steps
+    head_on_right: bool = False  # the old rule: an obstacle straight ahead is always passed right
+
+
+HEAD_ON = 1e-6
+"""An obstacle at a bearing within this of 0 (radians) is straight ahead (the front ray)."""
 
 
 class FootBot:
@@ -241,7 +249,10 @@ class FootBot:
     def _avoid(self, obstacle: float) -> FootCommand:
         m = self.motion
         if self._turning == 0.0:  # turn away from it, and keep that way until clear
-            self._turning = -1.0 if obstacle >= 0.0 else 1.0
+            if abs(obstacle) > HEAD_ON or self.motion.head_on_right:
+                self._turning = -1.0 if obstacle >= 0.0 else 1.0
+            else:  # straight ahead: either side, by a seeded coin (no side bias)
+                self._turning = -1.0 if self.rng.random() < 0.5 else 1.0
         self._escape = m.escape
         v = 0.0 if abs(obstacle) < math.pi / 4 else 0.5 * m.speed
         return FootCommand(v, self._turning * m.turn_rate, None, True)

@@ -105,20 +105,31 @@ async def footbot_loop(
     return trips
 
 
-def travel_times(trips: Mapping[str, list[list[Any]]], start: float) -> dict[str, Any]:
+def travel_times(
+    trips: Mapping[str, list[list[Any]]], start: float, duration: float | None = None
+) -> dict[str, Any]:
     """The paper's figures from every foot-bot's trips (``[goal, start, end]`` each): ``t_1``
     (the first arrival at the target, seconds after ``start``), ``t_a`` (the mean trip after
     each foot-bot's first; the first one starts in exploration), ``t_a_median`` (their median:
-    a few lost trips pull the mean up), ``t_a_all`` (every trip), ``trips`` and ``footbots``;
-    None where there is no trip to count."""
+    a few lost trips pull the mean up), ``t_a_all`` (every trip), ``trips``, ``later`` (how
+    many trips ``t_a`` averages) and ``footbots``; given the run's ``duration``, ``t_a_late``
+    and ``late``: the same as ``t_a`` over the later trips begun in the run's second half
+    (learning mostly done). None where there is no trip to count."""
     arrivals = [end for bot in trips.values() for goal, _, end in bot if goal == Goal.TARGET.value]
-    later = [end - begin for bot in trips.values() for _, begin, end in bot[1:]]
+    later = [(begin, end - begin) for bot in trips.values() for _, begin, end in bot[1:]]
     every = [end - begin for bot in trips.values() for _, begin, end in bot]
-    return {
+    times = [t for _, t in later]
+    out = {
         "t_1": min(arrivals) - start if arrivals else None,
-        "t_a": float(np.mean(later)) if later else None,
-        "t_a_median": float(np.median(later)) if later else None,
+        "t_a": float(np.mean(times)) if times else None,
+        "t_a_median": float(np.median(times)) if times else None,
         "t_a_all": float(np.mean(every)) if every else None,
         "trips": len(every),
+        "later": len(times),
         "footbots": len(trips),
     }
+    if duration is not None:
+        late = [t for begin, t in later if begin >= start + duration / 2]
+        out["t_a_late"] = float(np.mean(late)) if late else None
+        out["late"] = len(late)
+    return out

@@ -61,6 +61,8 @@ def test_the_runner_prints_tables_saves_runs_and_adds_to_them(
         (["--duration", "nan"], "--duration must be from 10"),
         (["--duration", "1e9"], "--duration must be from 10"),
         (["--saved", "--no-save"], "cannot go with --no-save"),
+        (["--eyebot-period", "0.01"], "--eyebot-period must be from 0.1"),
+        (["--eyebot-period", "inf"], "--eyebot-period must be from 0.1"),
     ],
 )
 def test_bad_settings_are_one_line_errors(argv: list[str], message: str) -> None:
@@ -72,3 +74,36 @@ def test_an_unknown_figure_is_refused_by_the_parser(capsys: pytest.CaptureFixtur
     with pytest.raises(SystemExit):
         _parse("--figure", "fig9")
     assert "unknown 'fig9'" in capsys.readouterr().err
+
+
+def test_old_readings_are_options_whose_runs_are_saved_apart(tmp_path: Path) -> None:
+    new = settings(_parse("--save", str(tmp_path / "runs")))
+    assert new.save == tmp_path / "runs" and new.old() == []
+    old = settings(
+        _parse(
+            *("--save", str(tmp_path / "runs"), "--eyebot-period", "1", "--theta-f", "any"),
+            *("--head-on", "right", "--eyebots-over-walls"),
+        )
+    )
+    assert old.period == 1.0 and old.head_on_right and old.over_walls
+    assert old.save == tmp_path / "runs-period=1-reading=any-head-on=right-over-walls"
+
+
+def test_points_can_be_narrowed_and_a_choice_of_none_is_an_error(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    argv = ["--figure", "fig2", "--runs", "1", "--duration", "30", "--seed", "3", "--quiet"]
+    argv += [
+        "--save",
+        str(tmp_path / "runs"),
+        "--no-plots",
+        "--footbots",
+        "2",
+        "--ways",
+        "learning",
+    ]
+    assert run(_parse(*argv)) == 0
+    out = capsys.readouterr().out
+    assert "fig2: 1 runs made" in out and "every run counted" in out
+    with pytest.raises(UsageError, match="no point with these --footbots"):
+        run(_parse(*argv[:-4], "--footbots", "7"))

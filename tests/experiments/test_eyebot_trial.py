@@ -10,7 +10,12 @@ from experiments.eyebot._trial import Settings, run
 
 def test_the_cluttered_arena_has_a_way_through_its_eye_bots() -> None:
     arena = cluttered()
-    assert len(arena.eyebots) == 28
+    assert len(arena.eyebots) == 24
+    old = {e.id: e.center for e in cluttered(over_walls=True).eyebots}
+    assert len(old) == 28
+    # the four left out are exactly the ones over a wall (x = 4 and x = 8)
+    assert sorted(set(old) - {e.id for e in arena.eyebots}) == ["e101", "e103", "e301", "e303"]
+    assert all(old[e][0] in (4.0, 8.0) for e in ("e101", "e103", "e301", "e303"))
     ids = {e.id: e.center for e in arena.eyebots}
     # every lattice neighbour lies in one of the 12 directions
     for a in ids.values():
@@ -49,3 +54,29 @@ def test_a_run_is_the_same_for_the_same_seed() -> None:
         assert a[key] == b[key]
     c = run(corridors(1.0), Settings(footbots=2, duration=60.0, window=30.0), seed=5)
     assert c["c_r"] + c["c_l"] > 0  # foot-bots were counted in the corridors
+
+
+def test_the_mirrored_double_corridor_is_the_plain_one_left_to_right() -> None:
+    plain, mirrored = corridors(2.0), corridors(2.0, mirrored=True)
+    w = plain.spec.size[0]
+    assert mirrored.mirrored and not plain.mirrored
+    flipped = {e.id: (round(w - e.center[0], 9), round(e.center[1], 9)) for e in plain.eyebots}
+    assert flipped == {
+        e.id: (round(e.center[0], 9), round(e.center[1], 9)) for e in mirrored.eyebots
+    }
+    assert mirrored.source == pytest.approx((w - plain.source[0], plain.source[1]))
+    assert mirrored.optimum == pytest.approx(plain.optimum)
+    # each eye-bot's shortest-way directions are mirrored too: θ → π − θ
+    for e in plain.eyebots:
+        for a, b in zip(plain.shortest[e.id], mirrored.shortest[e.id], strict=True):
+            assert math.cos(b) == pytest.approx(-math.cos(a), abs=1e-9)
+            assert math.sin(b) == pytest.approx(math.sin(a), abs=1e-9)
+
+
+@pytest.mark.parametrize("mirrored", [False, True])
+def test_rho_is_the_shorter_corridors_share_mirrored_or_not(mirrored: bool) -> None:
+    # eye-bots showing the shortest way send the foot-bots along the shorter corridor: on the
+    # right in the plain arena, on the left in the mirrored one; ρ counts it either way
+    arena = corridors(2.0, mirrored=mirrored)
+    figures = run(arena, Settings(footbots=2, duration=150.0, window=100.0, shortest=True), 4)
+    assert figures["c_r"] > 0 and figures["rho"] is not None and figures["rho"] > 0.9

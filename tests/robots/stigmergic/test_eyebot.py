@@ -5,7 +5,15 @@ import math
 import numpy as np
 import pytest
 
-from robots.stigmergic import SPACING, EyeBot, FootBotSeen, Goal, direction_index, trip_weight
+from robots.stigmergic import (
+    SPACING,
+    EyeBot,
+    FootBotSeen,
+    Goal,
+    Reading,
+    direction_index,
+    trip_weight,
+)
 
 
 def _moving(
@@ -26,7 +34,7 @@ def test_theta_f_is_read_off_the_leds_within_the_twelve_directions() -> None:
 
 def test_a_foot_bot_going_to_the_target_teaches_the_way_to_the_source() -> None:
     eye = EyeBot(np.random.default_rng(0))
-    eye.observe([_moving(0.0)])  # heading east: it comes from the west (index 6)
+    eye.observe([_moving(0.0, at=(-0.5, -0.3))])  # heading east: it comes from the west (6)
     assert eye.to_source.preferences[6] == pytest.approx(1 / 12 + 0.5)
     assert eye.to_target.preferences[6] == pytest.approx(1 / 12 * 0.99)
     assert sum(eye.to_source.preferences) == pytest.approx(1.5)
@@ -37,6 +45,44 @@ def test_a_foot_bot_going_to_the_source_teaches_the_way_to_the_target() -> None:
     eye.observe([_moving(math.pi / 2, goal=Goal.SOURCE)])  # going north: it comes from the south
     assert eye.to_target.preferences[9] == pytest.approx(1 / 12 + 0.5)
     assert eye.to_source.preferences[9] == pytest.approx(1 / 12 * 0.99)
+
+
+@pytest.mark.parametrize(
+    ("at", "heading", "coming"),
+    [
+        ((0.5, 0.0), math.pi, True),  # east of the eye-bot, heading west: straight at it
+        ((0.5, 0.0), 0.0, False),  # east of it, heading east: straight away
+        ((-0.5, 0.0), 0.0, True),  # west of it, heading east
+        ((0.0, 0.8), -math.pi / 2, True),  # north of it, heading south
+        ((0.0, 0.8), math.pi / 2, False),  # north of it, heading north
+        ((0.5, 0.0), math.pi - 1.4, True),  # 80° off the line to the eye-bot: still closing in
+        ((0.5, 0.0), math.pi + 1.4, True),  # the same on the other side
+        ((0.5, 0.0), math.pi - 1.7, False),  # 97° off: drawing away, if slowly
+        ((0.5, 0.0), math.pi + 1.7, False),
+        ((0.01, 0.0), math.pi, False),  # right under it: neither coming nor going
+    ],
+)
+def test_coming_towards_reads_the_heading_against_where_it_is_seen(
+    at: tuple[float, float], heading: float, coming: bool
+) -> None:
+    assert _moving(heading, at=at).coming_towards() is coming
+
+
+def test_a_foot_bot_with_its_front_led_off_is_not_coming_towards() -> None:
+    assert not FootBotSeen(beacon=(0.5, 0.0), goal=Goal.TARGET).coming_towards()
+
+
+def test_a_foot_bot_leaving_teaches_nothing_unless_the_old_reading_is_asked_for() -> None:
+    leaving = _moving(0.0, at=(0.5, 0.0))  # east of the eye-bot, heading east
+    new, old = (
+        EyeBot(np.random.default_rng(0)),
+        EyeBot(np.random.default_rng(0), reading=Reading.ANY),
+    )
+    new.observe([leaving])
+    old.observe([leaving])
+    assert new.to_source.preferences == new.to_target.preferences == tuple([1 / 12] * 12)
+    # the old reading: the way it leaves, reversed, is taken for the way it came (an echo)
+    assert old.to_source.preferences[6] == pytest.approx(1 / 12 + 0.5)
 
 
 def test_avoiding_marks_the_direction_where_it_is_seen_as_blocked() -> None:

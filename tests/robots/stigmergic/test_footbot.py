@@ -136,3 +136,20 @@ def test_the_same_seed_gives_the_same_walk() -> None:
 
     assert walk(11) == walk(11)
     assert walk(11) != walk(12)
+
+
+def _head_on_turn(seed: int, motion: Motion) -> float:
+    bot = FootBot(np.random.default_rng(seed), Goal.TARGET, motion)
+    return bot.step(FootPerception(pose=(0, 0, 0), obstacle=0.0)).w
+
+
+def test_an_obstacle_straight_ahead_is_passed_on_either_side_by_a_seeded_coin() -> None:
+    turns = [_head_on_turn(seed, Motion()) for seed in range(200)]
+    left = sum(w > 0 for w in turns)
+    assert all(w != 0 for w in turns)
+    assert 70 < left < 130  # no side bias (200 fair coins: 100 ± 7)
+    assert turns == [_head_on_turn(seed, Motion()) for seed in range(200)]  # seeded
+
+
+def test_the_old_head_on_rule_always_passes_right() -> None:
+    assert all(_head_on_turn(seed, Motion(head_on_right=True)) < 0 for seed in range(20))

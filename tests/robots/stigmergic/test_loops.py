@@ -133,9 +133,9 @@ def test_both_bundles_are_what_a_robot_process_drives() -> None:
 
 
 async def test_an_eye_bot_learns_from_what_its_camera_sees_and_instructs_every_period() -> None:
-    # a foot-bot 0.5 m ahead (along θ0) going to the target, its front LED further ahead: it
-    # comes from behind (π), where the source is
-    going = Spot((0.5, 0.0), (0.58, 0.0), show_leds(False, Goal.TARGET))
+    # a foot-bot 0.5 m behind (against θ0) going to the target, its front LED towards the
+    # eye-bot: it comes from behind (π), where the source is
+    going = Spot((-0.5, 0.0), (-0.42, 0.0), show_leds(False, Goal.TARGET))
     fake = FakeEye(spots=(going,))
     eyebot = EyeBot(np.random.default_rng(1))
     done = await eyebot_loop(fake.hardware(), eyebot, period=1.0, until=5.0)

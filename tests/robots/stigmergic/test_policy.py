@@ -72,3 +72,15 @@ def test_draws_take_the_best_with_probability_q_else_proportionally() -> None:
 
 def test_an_untrained_policy_draws_uniformly_even_when_greedy() -> None:
     _within(_frequencies(Policy(), q=1.0), np.full(DIRECTIONS, 1 / 12))
+
+
+def test_a_proportional_draw_is_the_one_numpy_choice_makes() -> None:
+    # the draw without rng.choice's checks: the same index from the same stream, so that runs
+    # saved before it came are made again the same
+    prefs = np.random.default_rng(0).random(DIRECTIONS) * 3.0
+    policy = Policy(prefs.copy())
+    mine, theirs = np.random.default_rng(42), np.random.default_rng(42)
+    for _ in range(2000):
+        theirs.random()  # the draw's greedy-or-not coin (q = 0: never greedy)
+        want = int(theirs.choice(DIRECTIONS, p=prefs / float(prefs.sum())))
+        assert policy.draw(mine, q=0.0) == want
