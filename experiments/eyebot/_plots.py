@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from .._figures import count_axis, legend, pyplot, save
+from .._figures import count_axis, legend, pyplot, runs_label, save
 from ._report import BINS, Records, fig3_panels, fig4_panels, histogram
 
 
@@ -66,7 +66,7 @@ def _hists(plt, records: Records, figure: str):  # type: ignore[no-untyped-def]
     centres = (np.arange(BINS) + 0.5) / BINS
     for ax, (title, rhos) in zip(axes, panels, strict=True):
         ax.bar(centres, histogram(rhos), width=0.9 / BINS)
-        ax.set_title(f"{title} ({len(rhos)} runs)", fontsize=8)
+        ax.set_title(f"{title} ({runs_label(len(rhos))})", fontsize=8)
         ax.set_xlim(0, 1)
         ax.set_ylim(0, 1)
         ax.set_xlabel("ρ")

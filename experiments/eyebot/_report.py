@@ -163,9 +163,11 @@ def fig4_panels(records: Records) -> list[tuple[int, list[float]]]:
 
 def fig3(records: Records) -> str:
     """ρ histograms for r = 1, 1.5, 2 (15 foot-bots deployed one every 30 s)."""
+    windows = sorted({float(r.get("window", 1000.0)) for r in records if "rho" in r} or {1000.0})
+    over = " or ".join(f"{w:g}" for w in windows)  # runs saved before it was kept: 1000 s
     out = [
         f"\nFig. 3, double corridor, {FIG3_FOOTBOTS} foot-bots, one every {DEPLOY_EVERY:g} s:"
-        " fraction of runs by ρ = c_r / (c_r + c_l) over the last 1000 s (c_r: the shorter"
+        f" fraction of runs by ρ = c_r / (c_r + c_l) over the last {over} s (c_r: the shorter"
         " corridor, the right one; the left one in a mirrored arena)",
         _header(),
     ]

@@ -233,6 +233,7 @@ def _figures(
         "shortest": settings.shortest,
         "weigh": settings.weigh,
         "duration": settings.duration,
+        "window": min(settings.window, settings.duration),
         "period": settings.period,
         "reading": settings.reading.value,
         "head_on_right": settings.motion.head_on_right,

@@ -34,3 +34,17 @@ def test_without_t_s_runs_the_bounds_are_not_decided() -> None:
     table = fig2_counted([_learn(200.0, 100.0, 90.0)])
     row = next(line for line in table.splitlines() if line.split()[:1] == ["10"])
     assert row.split()[-3:] == ["-", "-", "yes"]
+
+
+def test_fig3_says_the_window_its_runs_used() -> None:
+    """A 300 s run's ρ is over its last 300 s, not "the last 1000 s" (runs saved before the
+    window was kept read 1000 s, as they were made)."""
+    from experiments.eyebot._report import FIG3_FOOTBOTS, fig3
+
+    def run(window: float | None) -> dict[str, object]:
+        record: dict[str, object] = {"arena": "double-corridor-r2", "footbots": FIG3_FOOTBOTS}
+        record |= {"eyebots": "learning", "rho": 0.9}
+        return record if window is None else {**record, "window": window}
+
+    assert "over the last 300 s" in fig3([run(300.0)])
+    assert "over the last 1000 s" in fig3([run(None)])
