@@ -39,7 +39,8 @@ def test_without_t_s_runs_the_bounds_are_not_decided() -> None:
 def test_fig3_says_the_window_its_runs_used() -> None:
     """A 300 s run's ρ is over its last 300 s, not "the last 1000 s" (runs saved before the
     window was kept read 1000 s, as they were made)."""
-    from experiments.eyebot._report import FIG3_FOOTBOTS, fig3
+    from experiments.eyebot._report import fig3
+    from experiments.eyebot._sweep import FIG3_FOOTBOTS
 
     def run(window: float | None) -> dict[str, object]:
         record: dict[str, object] = {"arena": "double-corridor-r2", "footbots": FIG3_FOOTBOTS}
