@@ -29,18 +29,28 @@ def voronoi_partition(passable: np.ndarray, seeds: list[tuple[int, int]]) -> np.
     while level:
         nxt = []
         for k in level:
-            r, c = divmod(k, cols)
-            for m, ok in (
-                (k - cols, r > 0),
-                (k + cols, r < rows - 1),
-                (k - 1, c > 0),
-                (k + 1, c < cols - 1),
-            ):
-                if ok and lab[m] < 0 and flat[m]:
+            for m in _neighbours(k, rows, cols):
+                if lab[m] < 0 and flat[m]:
                     lab[m] = lab[k]
                     nxt.append(m)
         level = nxt
     return np.array(lab, dtype=np.int16).reshape(rows, cols)
+
+
+def _neighbours(k: int, rows: int, cols: int) -> list[int]:
+    """Cell ``k``'s 4-connected neighbours on a ``rows`` x ``cols`` grid (flat indices), in
+    the order up, down, left, right."""
+    r, c = divmod(k, cols)
+    out = []
+    if r > 0:
+        out.append(k - cols)
+    if r < rows - 1:
+        out.append(k + cols)
+    if c > 0:
+        out.append(k - 1)
+    if c < cols - 1:
+        out.append(k + 1)
+    return out
 
 
 def _geodesic(flat: list[bool], start: int, rows: int, cols: int) -> list[int]:
@@ -53,14 +63,8 @@ def _geodesic(flat: list[bool], start: int, rows: int, cols: int) -> list[int]:
         d += 1
         nxt = []
         for k in level:
-            r, c = divmod(k, cols)
-            for m, ok in (
-                (k - cols, r > 0),
-                (k + cols, r < rows - 1),
-                (k - 1, c > 0),
-                (k + 1, c < cols - 1),
-            ):
-                if ok and dist[m] < 0 and flat[m]:
+            for m in _neighbours(k, rows, cols):
+                if dist[m] < 0 and flat[m]:
                     dist[m] = d
                     nxt.append(m)
         level = nxt
