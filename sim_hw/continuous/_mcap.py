@@ -112,6 +112,7 @@ class McapSink(McapFile):
     ``range_max``, ``odom``)."""
 
     sensors = True  # the Recorder adds the robots' sensor readings to a tick
+    phases = True  # and the program phases heard since the last tick (each member's, in order)
 
     def __init__(self, path: str | Path) -> None:
         super().__init__(path)
@@ -165,8 +166,9 @@ class McapSink(McapFile):
                 self._sensors(rid, sensors[rid], head, t)
         if tf:
             self._put("/tf", "tf2_msgs/TFMessage", {"transforms": tf}, t)
-        for member, phase in tick.get("phases", {}).items():
-            self._put(f"/{member}/phase", "std_msgs/String", {"data": str(phase)}, t)
+        for member, heard in tick.get("phases", {}).items():
+            for phase in heard if isinstance(heard, list) else [heard]:
+                self._put(f"/{member}/phase", "std_msgs/String", {"data": str(phase)}, t)
         for bid, p in tick.get("boxes", {}).items():
             self._put(
                 f"/boxes/{bid}/pose",

@@ -73,6 +73,8 @@ class JsonLinesSink:
     is MCAP, :class:`sim_hw.continuous._mcap.McapSink`)."""
 
     sensors = False  # a tick's sensor readings are not kept (the commands replay them)
+    phases = False  # nor the phases: they arrive by the wall clock, and a seeded run must
+    # record the same bytes whatever the scheduling (docs/reproducible-runs.md)
 
     def __init__(self, path: str | Path) -> None:
         self._file: IO[str] = Path(path).open("w", encoding="utf-8")  # noqa: SIM115
@@ -107,7 +109,7 @@ class Recorder:
         self.world = world
         self.every = max(1, every)
         self._sink = open_sink(self.path)
-        self._phases: dict[str, str] = {}
+        self._phases: dict[str, list[str]] = {}
         self._sink.write(scene_header(world))
         self._write({"type": "tick", **world.snapshot(), "commands": {}})
 
@@ -118,8 +120,10 @@ class Recorder:
 
     def phase(self, member: str, phase: str) -> None:
         """``member``'s program reported ``phase``: written with the next recorded tick (its
-        ``phases``; see :mod:`sim_hw.continuous._phases`)."""
-        self._phases[member] = phase
+        ``phases``, in the order heard; see :mod:`sim_hw.continuous._phases`). Only a sink that
+        keeps phases (MCAP) gets them."""
+        if self._sink.phases:
+            self._phases.setdefault(member, []).append(phase)
 
     def _write(self, record: dict[str, Any]) -> None:
         if self._phases:

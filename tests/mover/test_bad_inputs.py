@@ -160,7 +160,10 @@ CASES = [
     case(["world", WORLD, "--lockstep", "--expect", "100000000"], "--expect: must be from 0"),
     case(["gridworld", "{grid.txt}", "--snapshot-every", "-1"], "--snapshot-every"),
     case(["experiment", "foraging", "--agents", "100000000"], "--agents must be at most"),
-    case(["experiment", "levy", "--robots", "100000000"], "--robots must be at most 1000"),
+    case(
+        ["experiment", "levy", "--robots", "100000000"],
+        "--targets, --robots and --check-robots must be at most 1000",
+    ),
     case(["experiment", "levy", "--workers", "100000"], "--workers must be from 1 to 64"),
     case(["experiment", "levy", "--scale", "nan"], "must be positive and finite"),
     case(["experiment", "eyebot", "--duration", "inf"], "--duration must be from 10"),

@@ -5,7 +5,15 @@ import math
 import numpy as np
 import pytest
 
-from robots.stigmergic import EyeBot, FootBotSeen, Goal, direction_index, read_leds, show_leds
+from robots.stigmergic import (
+    EyeBot,
+    FootBotSeen,
+    Goal,
+    Reading,
+    direction_index,
+    read_leds,
+    show_leds,
+)
 from sim_hw.continuous import Ceiling, EyeBotSpec, RobotSpec, World, WorldSpec
 
 
@@ -64,9 +72,15 @@ def test_an_eye_bot_reads_theta_f_within_its_resolution_and_learns_from_it() -> 
         came_from = seen.came_from()
         assert came_from is not None
         assert direction_index(came_from) == direction_index(heading + math.pi)
-        eye = EyeBot(rng=np.random.default_rng(0))
+        eye = EyeBot(rng=np.random.default_rng(0), reading=Reading.ANY)  # the old reading
         eye.observe([seen])
         assert eye.to_source.best() == direction_index(heading + math.pi)
+        eye = EyeBot(rng=np.random.default_rng(0))  # the default: approaching foot-bots only
+        eye.observe([seen])
+        learned = len(set(eye.to_source.prefs.tolist())) > 1
+        assert learned == seen.coming_towards()
+        if learned:
+            assert eye.to_source.best() == direction_index(heading + math.pi)
 
 
 def test_the_omnidirectional_camera_sees_eye_bots_within_range_nearest_first() -> None:
