@@ -66,7 +66,10 @@ async def test_a_world_process_records_poses_commands_and_program_phases(
         phases = [m.data for _, _, m in got[f"/{rid}/phase"]]
         assert {kind for _, kind, _ in got[f"/{rid}/phase"]} == {"std_msgs/msg/String"}
         want = "leading" if rid == "ada" else "following"
-        assert phases[-2:] == [want, "done"] and len(phases) == len(set(phases)), phases
+        # a phase begun and ended before the world knew the run (its first poll, every 0.5 s)
+        # is not heard: what is recorded ends with "done" and is what the program reported
+        assert phases[-1:] == ["done"] and set(phases) <= {want, "done"}, phases
+        assert len(phases) == len(set(phases)), phases
     assert [tr.child_frame_id for tr in got["/tf"][-1][2].transforms] == list(ROBOTS)
     # the seed and the world's name are the file's metadata
     from mcap.reader import make_reader
