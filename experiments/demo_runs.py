@@ -9,12 +9,14 @@ machine); :func:`report` is its report without the wall-clock figures (what must
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import os
 import re
+import signal
 import sys
 from pathlib import Path
 
-from mover.testing import stutter
+from mover.testing import descendants, stutter
 from sim_hw.continuous import read_recording
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -40,12 +42,27 @@ async def run_demo(
         stderr=asyncio.subprocess.STDOUT,
     )
     if stall_seed is None:
-        text, _ = await asyncio.wait_for(proc.communicate(), timeout)
+        text = await _bounded(proc, timeout)
     else:
         async with stutter(proc.pid, stall_seed) as stops:
-            text, _ = await asyncio.wait_for(proc.communicate(), timeout)
+            text = await _bounded(proc, timeout)
         print(f"{len(stops)} stops of the demo's processes, {sum(s for _, s in stops):.1f} s")
     return proc.returncode or 0, text.decode()
+
+
+async def _bounded(proc: asyncio.subprocess.Process, timeout: float) -> bytes:
+    """The demo's output once it ends; past ``timeout`` s its processes are killed (the demo
+    last) and what it printed is returned with a last line saying so: a demo that hangs fails
+    its caller with its own output, not at the test's time limit without it."""
+    task = asyncio.ensure_future(proc.communicate())
+    done, _ = await asyncio.wait({task}, timeout=timeout)
+    if done:
+        return task.result()[0]
+    for pid in [*descendants(proc.pid), proc.pid]:
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(pid, signal.SIGKILL)
+    text, _ = await asyncio.wait_for(task, 30)
+    return text + f"\nrun_demo: no end after {timeout:.0f} s: its processes killed\n".encode()
 
 
 def report(out: str) -> list[str]:

@@ -91,7 +91,7 @@ async def test_the_demo_fails_fast_with_the_worlds_error_when_it_rejects_its_fil
 
 
 @pytest.mark.slow
-@pytest.mark.timeout(500)
+@pytest.mark.timeout(600)  # three runs of at most 180 s each (run_demo ends a stuck one)
 async def test_one_seed_gives_one_recording_on_a_quiet_and_a_loaded_machine(
     tmp_path: Path,
 ) -> None:
