@@ -39,11 +39,11 @@ check: lint
 	$(PY) -m pytest -q $(QUICK)
 
 test: lint
-	$(PY) -m pytest -q
+	$(PY) -m pytest -q --durations=30
 
 coverage: $(STAMP)
 	$(PY) -m coverage erase
-	$(PY) -m coverage run -m pytest -q $(TESTS)
+	$(PY) -m coverage run -m pytest -q --durations=30 $(TESTS)
 	$(PY) -m coverage combine -q
 	$(PY) -m coverage report
 
