@@ -36,6 +36,7 @@ from __future__ import annotations
 import argparse
 import asyncio
 import logging
+import signal
 import sys
 import time
 from collections.abc import Callable
@@ -123,6 +124,9 @@ if __name__ == "__main__":
     p.add_argument("--name", required=True)
     logging.basicConfig(level=logging.WARNING, format="%(name)s %(levelname)s %(message)s")
     name = p.parse_args().name
+    # SIGINT is Ctrl-C even when the tests run in a shell's background job, whose processes
+    # inherit SIGINT ignored (then a SIGINT case would test nothing, and time out).
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     interrupt_on_sigterm()  # as the robot processes do
     try:
         asyncio.run(serve_programs(name, PROGRAMS, timeout=20))
