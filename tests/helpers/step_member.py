@@ -12,6 +12,9 @@ loss there. The members other than ``victim`` hold in their operation until the 
 ``enter``     announces as its operation starts (the step has just begun), then holds
 ``inside``    holds in its operation for a moment, announces, then holds
 ``after``     announces as its operation ends (an OR's raises: it never claims)
+``won``       (an OR; the victim must not be the designated member) finishes at once, claims
+              and wins; announces as its claim is answered (the step decided on the
+              designated member, which tells the others), then holds before the barrier
 ``deciding``  finishes at once; as the decision is taken on the designated member (the victim
               must be it), announces and blocks its loop for a moment: the decision has not
               left yet
@@ -23,6 +26,9 @@ With ``hold`` (seconds) the other members finish their operation then (0: a run 
 victim, or members that reach the step after the victim is lost).
 
 Each member ends with ``ok <time>`` or raises; the test reads ``mover.outcome``.
+
+SIGTERM ends the process as Ctrl-C does (its runs cancelled, every ``finally`` run, exit status
+143), as it ends ``mover robot`` and ``python -m robots`` (``mover.cli.interrupt_on_sigterm``).
 """
 
 from __future__ import annotations
@@ -30,12 +36,15 @@ from __future__ import annotations
 import argparse
 import asyncio
 import logging
+import signal
+import sys
 import time
 from collections.abc import Callable
 from typing import Any
 
 from mover import RunTeam
 from mover._collective import Collectives
+from mover.cli import Terminated, interrupt_on_sigterm
 from mover.testing import serve_programs
 
 HOLD = 3600.0  # an operation that never ends by itself
@@ -84,7 +93,7 @@ async def step(
             if kind == "or":
                 raise RuntimeError("the victim's operation fails: it never claims")
             return team.me
-        elif phase in ("deciding", "raises"):
+        elif phase in ("deciding", "raises", "won"):
             return team.me
         await asyncio.sleep(HOLD)
         return team.me
@@ -93,7 +102,11 @@ async def step(
         announce(team, "before")
         await asyncio.sleep(HOLD)
     if kind == "or":
-        await team.distributed_or(operation)
+        outcome = await team.distributed_or(operation)
+        if me_victim and phase == "won":
+            assert outcome.winner == team.me, outcome  # the others hold: it wins
+            announce(team, "won")
+            await asyncio.sleep(HOLD)
     else:
         await team.distributed_and(operation)
     if me_victim and phase == "raises":
@@ -110,4 +123,14 @@ if __name__ == "__main__":
     p = argparse.ArgumentParser()
     p.add_argument("--name", required=True)
     logging.basicConfig(level=logging.WARNING, format="%(name)s %(levelname)s %(message)s")
-    asyncio.run(serve_programs(p.parse_args().name, PROGRAMS, timeout=20))
+    name = p.parse_args().name
+    # SIGINT is Ctrl-C even when the tests run in a shell's background job, whose processes
+    # inherit SIGINT ignored (then a SIGINT case would test nothing, and time out).
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    interrupt_on_sigterm()  # as the robot processes do
+    try:
+        asyncio.run(serve_programs(name, PROGRAMS, timeout=20))
+    except Terminated:
+        sys.exit(143)
+    except KeyboardInterrupt:
+        sys.exit(130)
