@@ -5,7 +5,8 @@ variables), loads the small LED program (:func:`led_program`), stops the motors 
 :class:`ThymioHardware`: a :class:`robots.hal.Hardware` (clock, drive, odometry, the proximity
 sensors as its sonar, the top LED as its LED, the radio's locator) with the Thymio's own
 devices beside (ground sensors, buttons, both LED groups). It has no camera, bumper, floor
-cells or push test: those are None, and :func:`require` says so in one line.
+cells or push test: those are None, and a program that declares it needs one
+(``robots.library.needs``) fails as it starts, naming it in one line.
 
 Each tick costs one ``GET_VARIABLES`` of the 24 words from ``button.backward`` to
 ``motor.right.speed`` and its answer, plus one ``SET_VARIABLES`` per command that changed.
@@ -16,10 +17,11 @@ from __future__ import annotations
 import asyncio
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from typing import Any
 
-from robots.hal import Hardware, HardwareLost, Pose, RadioLocator
+from robots.hal import Hardware, Pose, RadioLocator
+from robots.library import MissingDevice, require
 
 from . import _aseba as aseba
 from ._calibration import Calibration
@@ -27,7 +29,7 @@ from ._clock import ThymioClock
 from ._devices import Buttons, Ground, Leds, Proximity, Readings, ThymioDrive, ThymioOdometry
 from ._link import HOST, Address, AsebaLink
 
-__all__ = ["ThymioHardware", "connect", "led_program", "require"]
+__all__ = ["MissingDevice", "ThymioHardware", "connect", "led_program", "require"]
 
 #: The variables read each tick, and the motor targets written.
 SENSED = (
@@ -60,28 +62,6 @@ class ThymioHardware(Hardware):
     leds: Leds
     calibration: Calibration
     link: str
-
-
-def require(hw: object, *devices: str) -> None:
-    """Raise ``MissingDevice`` naming the first of ``devices`` that ``hw`` lacks.
-
-    A program calls it as it starts (``require(robot.hw, "ground", "sonar")``) so that on
-    hardware without the device it fails at once, in one line, rather than halfway.
-    """
-    for name in devices:
-        if getattr(hw, name, None) is None:
-            has = [f.name for f in fields(hw) if getattr(hw, f.name) is not None]  # type: ignore[arg-type]
-            kind = type(hw).__name__
-            raise MissingDevice(
-                f"this program needs a {name}; the robot's hardware ({kind}) has none "
-                f"(it has: {', '.join(h for h in has if h not in ('id',))})"
-            )
-
-
-class MissingDevice(HardwareLost):
-    """A program needs a device the robot does not have (a camera on a Thymio): said in one
-    line as the program starts. A HardwareLost, so that a run reports it as an expected fault;
-    unlike a lost robot, waiting will not bring the device."""
 
 
 def led_program(link: AsebaLink, at: int) -> tuple[int, ...]:
