@@ -2,8 +2,9 @@
 
 It answers the messages the backend sends (list nodes, describe, get and set variables, load
 and run bytecode) over an asyncio stream (a TCP server's) or a file descriptor (a pty's master
-side, for the serial path). Its motors reach their targets at once: ``motor.*.speed`` reads
-back what ``motor.*.target`` was set to. Each message it got is kept in ``got``.
+side, for the serial path), alone or several on one stream (:class:`FakeBus`). Its motors
+reach their targets at once: ``motor.*.speed`` reads back what ``motor.*.target`` was set to.
+Each message it got is kept in ``got``.
 """
 
 from __future__ import annotations
@@ -111,7 +112,9 @@ class FakeNode:
             aseba.Message(aseba.LOCAL_EVENT, self.node, _string(e) + _string("")) for e in EVENTS
         ]
         out += [
-            aseba.Message(aseba.NATIVE_FUNCTION, self.node, _string(n) + _string(""))
+            aseba.Message(  # name, description, no parameters
+                aseba.NATIVE_FUNCTION, self.node, _string(n) + _string("") + struct.pack("<H", 0)
+            )
             for n in NATIVES
         ]
         return b"".join(m.encode() for m in out)
@@ -119,6 +122,18 @@ class FakeNode:
     def feed(self, buffer: bytearray) -> bytes:
         """Take the whole messages off ``buffer``; the answers to them."""
         return b"".join(self.answer(msg) for msg in aseba.split(buffer))
+
+
+class FakeBus:
+    """Fake nodes on one stream, as the nodes paired with one wireless dongle are: every
+    message reaches each of them, each answers its own."""
+
+    def __init__(self, *nodes: FakeNode) -> None:
+        self.nodes = nodes
+
+    def feed(self, buffer: bytearray) -> bytes:
+        """Take the whole messages off ``buffer``; every node's answers to them."""
+        return b"".join(node.answer(msg) for msg in aseba.split(buffer) for node in self.nodes)
 
     async def serve_stream(
         self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter

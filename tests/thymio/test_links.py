@@ -8,10 +8,13 @@ import asyncio
 import contextlib
 import inspect
 import os
+import shutil
+import tty
 from collections.abc import AsyncIterator
 
 import pytest
 
+from mover._config import free_port
 from robots import Robot
 from robots.hal import HardwareLost, Pose, RadioLocator
 from robots.library import MissingDevice, needs
@@ -19,17 +22,18 @@ from robots.thymio import OdometryLocator, ThymioHardware, connect
 from robots.thymio._devices import ThymioOdometry
 from robots.thymio._hardware import SENSED
 
-from .fake_node import NODE, TABLE, VARIABLES, FakeNode, offset
+from .fake_node import NODE, TABLE, VARIABLES, FakeBus, FakeNode, offset
 
 LED_WORDS = sum(size for _, size in VARIABLES)  # the LED program's words, past the named ones
 
 
 @contextlib.asynccontextmanager
-async def _pty(fake: FakeNode) -> AsyncIterator[tuple[str, int]]:
-    """A pty served by ``fake`` on its master side: (the device path, the master fd)."""
+async def _pty(*fakes: FakeNode) -> AsyncIterator[tuple[str, int]]:
+    """A pty served by ``fakes`` on its master side: (the device path, the master fd)."""
     master, slave = os.openpty()
+    tty.setraw(slave)  # as the link sets it (asebaswitch opens it too)
     os.set_blocking(master, False)
-    serving = asyncio.get_running_loop().create_task(fake.serve_fd(master))
+    serving = asyncio.get_running_loop().create_task(FakeBus(*fakes).serve_fd(master))
     try:
         yield os.ttyname(slave), master
     finally:
@@ -77,29 +81,12 @@ async def test_a_serial_path_with_no_device_is_one_line() -> None:
         await connect("t1", "/dev/no-such-tty", timeout=1.0)
 
 
-class _Bus:
-    """Several fake nodes on one stream, as ``asebaswitch`` puts every node behind one port."""
-
-    def __init__(self, *nodes: FakeNode) -> None:
-        self.nodes = nodes
-
-    async def serve(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
-        buffers = [bytearray() for _ in self.nodes]
-        try:
-            while chunk := await reader.read(4096):
-                for node, buffer in zip(self.nodes, buffers, strict=True):
-                    buffer += chunk
-                    writer.write(node.feed(buffer))
-        finally:
-            writer.close()
-
-
 async def test_node_picks_one_robot_among_several_on_one_link() -> None:
     """Two nodes behind one TCP port: ``node=`` connects to its own; its commands reach only
     it, its readings come only from it."""
     first, second = FakeNode(NODE), FakeNode(NODE + 1)
     second.set("button.left", 1)
-    server = await asyncio.start_server(_Bus(first, second).serve, "127.0.0.1", 0)
+    server = await asyncio.start_server(FakeBus(first, second).serve_stream, "127.0.0.1", 0)
     port = server.sockets[0].getsockname()[1]
     async with server:
         hw = await connect("t2", f"tcp:127.0.0.1:{port}", node=NODE + 1, tick_period=0.01)
@@ -110,6 +97,53 @@ async def test_node_picks_one_robot_among_several_on_one_link() -> None:
         assert second.get("motor.left.target") > 0 and first.get("motor.left.target") == 0
         assert not first.bytecode and second.bytecode  # the LED program went to t2's only
         server.close()
+
+
+@pytest.mark.processes
+@pytest.mark.skipif(
+    shutil.which("asebaswitch") is None,
+    reason="asebaswitch is not installed (Debian package: aseba)",
+)
+async def test_two_robots_on_one_serial_device_through_asebaswitch() -> None:
+    """What docs/thymio.md says for several robots behind one wireless dongle, with aseba's own
+    switch: ``asebaswitch -p PORT ser:device=DEVICE`` (here a pty with two nodes on it, as a
+    dongle paired with two robots), then one link per robot, ``tcp:…:PORT`` with its
+    ``node``: each drives its own robot and reads its own sensors."""
+    first, second = FakeNode(NODE), FakeNode(NODE + 1)
+    second.set("button.left", 1)
+    port = free_port()
+    async with _pty(first, second) as (device, _):
+        switch = await asyncio.create_subprocess_exec(
+            "asebaswitch", "-p", str(port), f"ser:device={device}",
+            stdout=asyncio.subprocess.DEVNULL, stderr=asyncio.subprocess.DEVNULL,
+        )  # fmt: skip
+        try:
+            link = f"tcp:127.0.0.1:{port}"
+            one = await _connect_soon("t1", link, NODE)
+            two = await _connect_soon("t2", link, NODE + 1)
+            one.drive.set_velocity(0.1, 0.0)
+            two.drive.set_velocity(0.0, -1.0)
+            for _ in range(3):
+                await asyncio.gather(one.clock.tick(), two.clock.tick())
+            forward = round(0.1 / one.calibration.speed_per_unit)
+            assert (first.get("motor.left.target"), first.get("motor.right.target")) == (
+                forward, forward)  # fmt: skip
+            left, right = second.get("motor.left.target"), second.get("motor.right.target")
+            assert left == -right > 0  # turning clockwise in place
+            assert not one.buttons.pressed() and two.buttons.pressed() == {"left"}
+        finally:
+            switch.terminate()
+            await switch.wait()
+
+
+async def _connect_soon(name: str, link: str, node: int) -> ThymioHardware:
+    """Connect once the switch listens (it takes a moment to start)."""
+    async with asyncio.timeout(10):
+        while True:
+            try:
+                return await connect(name, link, node=node, tick_period=0.02)
+            except HardwareLost:
+                await asyncio.sleep(0.2)
 
 
 class _Tracker:
@@ -127,7 +161,7 @@ async def test_the_locator_hook_gives_the_radio_a_tracker() -> None:
     """By default the radio's position is the odometry's, from the spec's pose; ``locator=``
     replaces it with what the function makes of the odometry."""
     fake = FakeNode()
-    server = await asyncio.start_server(fake.serve_stream, "127.0.0.1", 0)
+    server = await asyncio.start_server(FakeBus(fake).serve_stream, "127.0.0.1", 0)
     link = f"tcp:127.0.0.1:{server.sockets[0].getsockname()[1]}"
     async with server:
         plain = await connect("t1", link, spec={"pose": [0.5, 0.2, 1.0]})
@@ -165,7 +199,7 @@ async def test_a_program_that_needs_a_camera_fails_at_start_on_a_thymio() -> Non
     assert look.needs == ("ground", "camera")  # type: ignore[attr-defined]
     assert list(inspect.signature(look).parameters) == ["robot", "team", "far"]
     fake = FakeNode()
-    server = await asyncio.start_server(fake.serve_stream, "127.0.0.1", 0)
+    server = await asyncio.start_server(FakeBus(fake).serve_stream, "127.0.0.1", 0)
     async with server:
         hw = await connect("t1", f"tcp:127.0.0.1:{server.sockets[0].getsockname()[1]}")
         robot = Robot("t1", hw)

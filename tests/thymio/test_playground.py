@@ -20,6 +20,7 @@ import pytest
 
 from mover import launch
 from mover._config import free_port
+from mover.testing import cluster
 from robots.hal import HardwareLost
 from robots.thymio import ThymioHardware, connect
 from robots.thymio._link import Address, AsebaLink
@@ -255,3 +256,32 @@ async def _until_logged(logs: list[Path], words: str) -> None:
     async with asyncio.timeout(20):
         while not all(words in log.read_text() for log in logs):
             await asyncio.sleep(0.2)
+
+
+@pytest.mark.timeout(90)
+async def test_a_program_that_needs_a_camera_fails_at_start_on_a_thymio(
+    tmp_path: Path, playground: Playground
+) -> None:
+    """``@needs("camera")`` on a Thymio robot process: one line at the robot, one at the
+    launcher, naming the device; no traceback; the robot stays up (nothing was lost)."""
+    robot = PlaygroundRobot("t1", 0.5, 0.5, 0.0, free_port())
+    world = tmp_path / "one.playground"
+    world.write_text(world_xml([robot]))
+    await playground(world, [robot.port])
+    logs = tmp_path / "logs"
+    async with cluster(cwd=ROOT, logs=logs) as c, c.launcher() as node:
+        proc = await c.start(
+            "tests.thymio.camera_robot", "t1", f"tcp:127.0.0.1:{robot.port}", label="t1"
+        )
+        outcomes = await asyncio.wait_for(launch(node, "look", ["t1"], {}, run="cam"), 30)
+        assert proc.returncode is None  # the process stays: a missing device is not a lost robot
+    outcome = outcomes["t1"]
+    assert outcome["error"].startswith(
+        "MissingDevice: program look needs a camera; the robot's hardware (ThymioHardware) "
+        "has none (it has: clock, drive, odometry, sonar, led, radio, ground, buttons, leds"
+    ), outcome
+    assert "\n" not in outcome["error"] and "traceback" not in outcome
+    text = (logs / "t1.log").read_text()
+    said = [ln for ln in text.splitlines() if "needs a camera" in ln]
+    assert len(said) == 1 and "run cam failed: MissingDevice" in said[0], text
+    assert "Traceback" not in text and "waiting for it to come back" not in text
