@@ -8,8 +8,9 @@ devices beside (ground sensors, buttons, both LED groups). It has no camera, bum
 cells or push test: those are None, and a program that declares it needs one
 (``robots.library.needs``) fails as it starts, naming it in one line.
 
-Each tick costs one ``GET_VARIABLES`` of the 24 words from ``button.backward`` to
-``motor.right.speed`` and its answer, plus one ``SET_VARIABLES`` per command that changed.
+Each tick costs one ``GET_VARIABLES`` of the words from ``button.backward`` to the LED
+program's copy of the lights it applied (59 words on the Playground's firmware) and its
+answer, plus one ``SET_VARIABLES`` per command that changed.
 """
 
 from __future__ import annotations
@@ -44,6 +45,8 @@ SENSED = (
     "motor.right.speed",
 )
 DRIVEN = ("motor.left.target", "motor.right.target")
+LED_WORDS = 11
+"""The words the LED program applies (top r, g, b, the circle's 8), and copies after them."""
 LED_EVENT = "buttons"
 """The firmware's periodic event (20 Hz on the robot) the LED program runs on."""
 
@@ -67,17 +70,22 @@ class ThymioHardware(Hardware):
 def led_program(link: AsebaLink, at: int) -> tuple[int, ...]:
     """Bytecode that, on each ``buttons`` event, sets the top LED from the words ``at``..
     ``at+2`` and the circle from ``at+3``..``at+10`` (the Thymio sets its LEDs through native
-    functions only, so a host writes those words and this program applies them).
+    functions only, so a host writes those words and this program applies them), then copies
+    the 11 words it applied to ``at+11``..``at+21``: what the host reads back as the lights
+    shown (the LEDs themselves are not readable over Aseba).
 
     Aseba bytecode: a table of (event, address) after its own length, then for each native
     call the addresses of its arguments pushed last first (``push.s``, 0x1000), the call
-    (``callnat``, 0xC000) and ``stop`` (0x0000).
+    (``callnat``, 0xC000); each copy a ``load`` (0x3000) and a ``store`` (0x4000); ``stop``
+    (0x0000).
     """
     event = 0xFFFE - link.events.index(LED_EVENT)
     code: list[int] = [3, event, 3]
     for native, first, count in (("leds.top", at, 3), ("leds.circle", at + 3, 8)):
         code += [0x1000 | (first + i) for i in reversed(range(count))]
         code.append(0xC000 | link.natives.index(native))
+    for i in range(LED_WORDS):
+        code += [0x3000 | (at + i), 0x4000 | (at + LED_WORDS + i)]
     code.append(0x0000)
     return tuple(code)
 
@@ -90,9 +98,10 @@ class _Thymio:
     ) -> None:
         self.link, self.cal, self.drive, self.leds, self.timeout = link, cal, drive, leds, timeout
         offsets = [link.variables[n] for n in SENSED]
-        self.start = min(o for o, _ in offsets)
-        self.length = max(o + s for o, s in offsets) - self.start
         self.led_words = link.table_size
+        self.start = min(o for o, _ in offsets)
+        end = max(max(o + s for o, s in offsets), self.led_words + 2 * LED_WORDS)
+        self.length = end - self.start
         self.sent_targets: tuple[int, int] | None = None
         self.sent_leds: tuple[int, ...] | None = None
 
@@ -124,6 +133,7 @@ class _Thymio:
             buttons=tuple(
                 var(f"button.{b}")[0] for b in ("backward", "left", "center", "forward", "right")
             ),
+            leds=words[self.led_words + LED_WORDS - self.start :][:LED_WORDS],
         )
 
     def stop_now(self) -> None:
@@ -169,12 +179,14 @@ async def connect(
         await conn.aclose()
         raise
     odometry = ThymioOdometry(cal, first, start)
+    leds.readings = first
     prox, ground, buttons = Proximity(cal, first), Ground(cal, first), Buttons(cal, first)
 
     def took(readings: Readings) -> None:
         odometry.advance(readings)
         for device in (odometry, prox, ground, buttons):
             device.readings = readings
+        leds.readings = readings
 
     clock = ThymioClock(tick_period, first, thymio.exchange, took, thymio.stop_now)
     watch = asyncio.get_running_loop().create_task(conn.wait_lost())

@@ -36,7 +36,9 @@ VARIABLES: tuple[tuple[str, int], ...] = (
 )
 EVENTS = ("button.center", "buttons", "prox")
 NATIVES = ("math.copy", "leds.circle", "leds.top")
-TABLE = sum(size for _, size in VARIABLES) + 11  # (the LED program's 11 words after them)
+LED_WORDS = sum(size for _, size in VARIABLES)
+"""Where the LED program's 11 words start (past the named variables), and its copy after."""
+TABLE = LED_WORDS + 22
 
 
 def offset(name: str) -> int:
@@ -93,6 +95,8 @@ class FakeNode:
             self.table[start : start + len(values)] = values
             for side in ("left", "right"):  # the motors reach their targets at once
                 self.set(f"motor.{side}.speed", self.get(f"motor.{side}.target"))
+            if self.bytecode:  # the LED program applies the lights and copies what it did
+                self.table[LED_WORDS + 11 : TABLE] = self.table[LED_WORDS : LED_WORDS + 11]
         elif msg.type == aseba.GET_VARIABLES:
             start, length = words[1], words[2]
             payload = struct.pack(f"<H{length}h", start, *self.table[start : start + length])

@@ -21,10 +21,10 @@ from robots.library import MissingDevice, needs
 from robots.thymio import OdometryLocator, ThymioHardware, connect
 from robots.thymio._devices import ThymioOdometry
 from robots.thymio._hardware import SENSED
+from robots.thymio._link import Address, list_nodes
+from robots.thymio.nodes import main as nodes_main
 
-from .fake_node import NODE, TABLE, VARIABLES, FakeBus, FakeNode, offset
-
-LED_WORDS = sum(size for _, size in VARIABLES)  # the LED program's words, past the named ones
+from .fake_node import LED_WORDS, NODE, TABLE, VARIABLES, FakeBus, FakeNode, offset
 
 
 @contextlib.asynccontextmanager
@@ -61,6 +61,7 @@ async def test_the_serial_path_over_a_pty_drives_reads_and_loses_the_robot() -> 
         target = round(0.1 / hw.calibration.speed_per_unit)
         assert (fake.get("motor.left.target"), fake.get("motor.right.target")) == (target,) * 2
         assert tuple(fake.table[LED_WORDS : LED_WORDS + 3]) == (0, 32, 0)
+        assert hw.leds.shown() == ((0, 32, 0), (0,) * 8)  # (the fake applies at once)
         assert hw.buttons.pressed() == {"center"}
         assert hw.sonar is not None and hw.sonar.ranges()[2] < hw.sonar.max_range
         assert hw.odometry.pose()[0] > 0  # the speeds read back are integrated
@@ -81,14 +82,28 @@ async def test_a_serial_path_with_no_device_is_one_line() -> None:
         await connect("t1", "/dev/no-such-tty", timeout=1.0)
 
 
-async def test_node_picks_one_robot_among_several_on_one_link() -> None:
-    """Two nodes behind one TCP port: ``node=`` connects to its own; its commands reach only
-    it, its readings come only from it."""
-    first, second = FakeNode(NODE), FakeNode(NODE + 1)
+def test_the_nodes_tool_says_what_is_wrong_in_one_line(capsys: pytest.CaptureFixture[str]) -> None:
+    assert nodes_main(["/dev/no-such-tty"]) == 1
+    said = capsys.readouterr().err
+    assert said == "error: no Thymio at /dev/no-such-tty: No such file or directory\n"
+    assert nodes_main(["ttyACM0"]) == 1
+    assert "expected tcp:HOST:PORT or a serial device path" in capsys.readouterr().err
+
+
+async def test_node_picks_one_robot_among_several_on_one_link(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """Two nodes behind one TCP port: the nodes tool lists both; ``node=`` connects to its
+    own; its commands reach only it, its readings come only from it."""
+    first, second = FakeNode(NODE), FakeNode(NODE + 1, name="thymio-B")
     second.set("button.left", 1)
     server = await asyncio.start_server(FakeBus(first, second).serve_stream, "127.0.0.1", 0)
     port = server.sockets[0].getsockname()[1]
     async with server:
+        here = Address(host="127.0.0.1", port=port)
+        assert await list_nodes(here, 0.3) == {NODE: "thymio-II", NODE + 1: "thymio-B"}
+        assert await asyncio.to_thread(nodes_main, [f"tcp:127.0.0.1:{port}", "--wait", "0.3"]) == 0
+        assert capsys.readouterr().out == f"node {NODE}: thymio-II\nnode {NODE + 1}: thymio-B\n"
         hw = await connect("t2", f"tcp:127.0.0.1:{port}", node=NODE + 1, tick_period=0.01)
         hw.drive.set_velocity(0.05, 0.0)
         await hw.clock.tick()
@@ -119,6 +134,8 @@ async def test_two_robots_on_one_serial_device_through_asebaswitch() -> None:
         )  # fmt: skip
         try:
             link = f"tcp:127.0.0.1:{port}"
+            found = await _listed(Address(port=port, host="127.0.0.1"))
+            assert found == {NODE: "thymio-II", NODE + 1: "thymio-II"}
             one = await _connect_soon("t1", link, NODE)
             two = await _connect_soon("t2", link, NODE + 1)
             one.drive.set_velocity(0.1, 0.0)
@@ -134,6 +151,17 @@ async def test_two_robots_on_one_serial_device_through_asebaswitch() -> None:
         finally:
             switch.terminate()
             await switch.wait()
+
+
+async def _listed(address: Address) -> dict[int, str]:
+    """The nodes on ``address`` once the switch listens and has them."""
+    async with asyncio.timeout(10):
+        while True:
+            with contextlib.suppress(HardwareLost):
+                found = await list_nodes(address, 0.5)
+                if found:
+                    return found
+            await asyncio.sleep(0.2)
 
 
 async def _connect_soon(name: str, link: str, node: int) -> ThymioHardware:
@@ -178,7 +206,7 @@ async def test_the_locator_hook_gives_the_radio_a_tracker() -> None:
 
 def test_the_fake_node_has_what_the_backend_reads() -> None:
     names = {n for n, _ in VARIABLES}
-    assert set(SENSED) <= names and TABLE == LED_WORDS + 11
+    assert set(SENSED) <= names and TABLE == LED_WORDS + 22
     assert offset("button.backward") == 1
 
 
