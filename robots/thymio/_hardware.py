@@ -65,6 +65,9 @@ class ThymioHardware(Hardware):
     leds: Leds
     calibration: Calibration
     link: str
+    aseba: AsebaLink
+    """The Aseba conversation itself, for what the HAL does not map: any variable by name
+    (``aseba.write("button.center", (1,))``, ``await aseba.read(offset, size, timeout)``)."""
 
 
 def led_program(link: AsebaLink, at: int) -> tuple[int, ...]:
@@ -205,6 +208,7 @@ async def connect(
         leds=leds,
         calibration=cal,
         link=link,
+        aseba=conn,
     )
 
 
