@@ -156,12 +156,13 @@ async def connect(
 ) -> ThymioHardware:
     """Connect to the Thymio at ``link`` (``tcp:HOST:PORT`` or a serial device) as ``robot_id``.
 
-    ``node``: the Aseba node id (None: the first that answers; several Thymios behind one
-    wireless dongle need it). ``spec``: ``pose`` ([x, y, heading], where odometry starts) and
-    ``calibration`` (:meth:`Calibration.of`). ``tick_period``: seconds between control ticks;
-    ``timeout``: seconds an answer may take before the robot counts as lost. ``locator``
-    makes the radio's locator from the odometry (the default: the odometry itself; see
-    :mod:`robots.thymio` for a lab's tracking system). HardwareLost if the robot is not there
+    ``node``: the Aseba node id (None: the first that answers; several Thymios on one link, as
+    behind ``asebaswitch``, need it). ``spec``: ``pose`` ([x, y, heading], where odometry
+    starts) and ``calibration`` (:meth:`Calibration.of`). ``tick_period``: seconds between
+    control ticks; ``timeout``: seconds an answer may take before the robot counts as lost.
+    ``locator`` makes the radio's locator from the odometry (the default: the odometry itself;
+    see :mod:`robots.thymio` for a lab's tracking system). HardwareLost if the robot is not
+    there
     or is not a Thymio II.
     """
     spec = spec or {}
