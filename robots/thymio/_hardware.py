@@ -162,8 +162,7 @@ async def connect(
     control ticks; ``timeout``: seconds an answer may take before the robot counts as lost.
     ``locator`` makes the radio's locator from the odometry (the default: the odometry itself;
     see :mod:`robots.thymio` for a lab's tracking system). HardwareLost if the robot is not
-    there
-    or is not a Thymio II.
+    there or is not a Thymio II.
     """
     spec = spec or {}
     cal = Calibration.of(spec.get("calibration", {}))
