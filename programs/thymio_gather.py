@@ -14,12 +14,14 @@ from typing import Any
 
 from mover import RunTeam
 from robots import Robot
-from robots.thymio import ProxWander, ThymioHardware, drive_to, require, wander_until
+from robots.library import needs
+from robots.thymio import ProxWander, ThymioHardware, drive_to, wander_until
 
 #: The ground sensors sit this far ahead of the wheels' axis (metres).
 SENSORS_AHEAD = 0.07
 
 
+@needs("ground", "sonar", "leds")  # checked as it starts: one line on a robot without
 async def thymio_gather(
     robot: Robot[ThymioHardware],
     team: RunTeam,
@@ -31,7 +33,6 @@ async def thymio_gather(
 
     The search gives up after ``timeout`` seconds (its result then None: no patch); a robot
     that has not reached its place within ``timeout / 3`` seconds stays where it is."""
-    require(robot.hw, "ground", "sonar", "leds")
     hw = robot.hw
     hw.leds.show("blue")
     await team.report("searching")

@@ -15,7 +15,9 @@ function or small class of readings → command, testable without a world.
   :data:`METHODS` (FL, L, L+P; :data:`WALKS` with their parts), :func:`levy_search`,
   :func:`repulsion` (eq. 9), :func:`mantegna` (eq. 11-12), :class:`LevySteps`, :class:`FixedSteps`,
   :func:`viswanathan_mu` (eq. 4-5), :func:`stable_alpha`, :func:`mean_flights` (eq. 3);
-* training (section 5) — :func:`snapshot`.
+* training (section 5) — :func:`snapshot`;
+* what a program needs of the hardware — :func:`needs` (declared, checked as it starts),
+  :func:`require`, :class:`MissingDevice`.
 """
 
 from robots.hal import MARK, MARKED
@@ -66,6 +68,7 @@ from ._manipulate import (
     steerer,
     steerer_command,
 )
+from ._needs import MissingDevice, needs, require
 from ._search import (
     Found,
     Predicate,
@@ -93,6 +96,7 @@ __all__ = [
     "LevySense",
     "LevySteps",
     "LevyWalker",
+    "MissingDevice",
     "Neighbour",
     "Path",
     "Predicate",
@@ -115,11 +119,13 @@ __all__ = [
     "mean_flights",
     "movable",
     "moved",
+    "needs",
     "object_pose",
     "pusher",
     "pusher_command",
     "recognition",
     "repulsion",
+    "require",
     "search",
     "sees",
     "sidestep",

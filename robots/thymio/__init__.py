@@ -12,6 +12,8 @@ passes ``locator`` to :func:`connect`: a function of the odometry that returns a
 reads the tracker's latest pose for this robot.
 """
 
+from robots.library import needs
+
 from ._behaviours import ProxWander, drive_to, wander_until
 from ._calibration import PROX_ANGLES, Calibration
 from ._devices import BUTTONS, Buttons, Ground, Leds, Proximity
@@ -31,6 +33,7 @@ __all__ = [
     "ThymioHardware",
     "connect",
     "drive_to",
+    "needs",
     "require",
     "wander_until",
 ]

@@ -6,8 +6,10 @@ Installed as the ``mover.hardware`` entry point ``thymio``::
     mover robot --name t1 --hardware thymio --option link=/dev/ttyACM0
 
 ``link`` (required) is ``tcp:HOST:PORT`` (a Playground robot, or ``asebaswitch``) or a serial
-device (the robot's USB cable, or the wireless dongle); ``node`` the Aseba node id (needed
-when several robots share one dongle); ``tick_period`` the control period in seconds (default
+device (the robot's USB cable, or a wireless dongle paired with it alone); ``node`` the Aseba
+node id (needed when several robots share one link: a dongle paired with several robots,
+served to one process each by ``asebaswitch``; ``python -m robots.thymio.nodes LINK`` lists
+them); ``tick_period`` the control period in seconds (default
 0.05); ``timeout`` how long an answer may take before the robot counts as lost (default 2).
 The robot's spec gives ``pose`` (where odometry starts, and so the radio's position) and
 ``calibration`` (``robots.thymio.Calibration``). It offers the procedures of a robot with a

@@ -48,13 +48,15 @@ COLOURS: dict[str, tuple[int, int, int]] = {
 class Readings:
     """One tick's raw readings: ``t`` (seconds, the host's wall clock when they came),
     ``prox`` (7), ``ground`` (2, ``prox.ground.delta``), ``speeds`` (left, right measured),
-    ``buttons`` (5, in :data:`BUTTONS` order)."""
+    ``buttons`` (5, in :data:`BUTTONS` order), ``leds`` (11: the lights the robot's LED
+    program last applied, :meth:`Leds.words`' order; empty: not read)."""
 
     t: float
     prox: tuple[int, ...]
     ground: tuple[int, int]
     speeds: tuple[int, int]
     buttons: tuple[int, ...]
+    leds: tuple[int, ...] = ()
 
 
 class _Fed:
@@ -163,6 +165,8 @@ class Leds:
     def __init__(self) -> None:
         self.top_rgb = (0, 0, 0)
         self.circle_levels: tuple[int, ...] = (0,) * 8
+        self.readings: Readings | None = None
+        """The last tick's readings (set by the clock)."""
 
     def show(self, status: str) -> None:
         """Light the top LED with ``status``'s colour (see the class)."""
@@ -181,6 +185,15 @@ class Leds:
     def words(self) -> tuple[int, ...]:
         """The 11 words the LED program reads: top r, g, b, then the circle."""
         return self.top_rgb + self.circle_levels
+
+    def shown(self) -> tuple[tuple[int, int, int], tuple[int, ...]] | None:
+        """What the robot's LED program last applied at the last tick: (top r, g, b), (the
+        circle's 8); None before it ran. It runs 20 times a second on the robot, so a command
+        shows here a tick or two after it was sent."""
+        if self.readings is None or len(self.readings.leds) != 11:
+            return None
+        words = self.readings.leds
+        return (words[0], words[1], words[2]), words[3:]
 
 
 def _level(v: int) -> int:

@@ -5,10 +5,12 @@ variables), loads the small LED program (:func:`led_program`), stops the motors 
 :class:`ThymioHardware`: a :class:`robots.hal.Hardware` (clock, drive, odometry, the proximity
 sensors as its sonar, the top LED as its LED, the radio's locator) with the Thymio's own
 devices beside (ground sensors, buttons, both LED groups). It has no camera, bumper, floor
-cells or push test: those are None, and :func:`require` says so in one line.
+cells or push test: those are None, and a program that declares it needs one
+(``robots.library.needs``) fails as it starts, naming it in one line.
 
-Each tick costs one ``GET_VARIABLES`` of the 24 words from ``button.backward`` to
-``motor.right.speed`` and its answer, plus one ``SET_VARIABLES`` per command that changed.
+Each tick costs one ``GET_VARIABLES`` of the words from ``button.backward`` to the LED
+program's copy of the lights it applied (59 words on the Playground's firmware) and its
+answer, plus one ``SET_VARIABLES`` per command that changed.
 """
 
 from __future__ import annotations
@@ -16,10 +18,11 @@ from __future__ import annotations
 import asyncio
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from typing import Any
 
-from robots.hal import Hardware, HardwareLost, Pose, RadioLocator
+from robots.hal import Hardware, Pose, RadioLocator
+from robots.library import MissingDevice, require
 
 from . import _aseba as aseba
 from ._calibration import Calibration
@@ -27,7 +30,7 @@ from ._clock import ThymioClock
 from ._devices import Buttons, Ground, Leds, Proximity, Readings, ThymioDrive, ThymioOdometry
 from ._link import HOST, Address, AsebaLink
 
-__all__ = ["ThymioHardware", "connect", "led_program", "require"]
+__all__ = ["MissingDevice", "ThymioHardware", "connect", "led_program", "require"]
 
 #: The variables read each tick, and the motor targets written.
 SENSED = (
@@ -42,6 +45,8 @@ SENSED = (
     "motor.right.speed",
 )
 DRIVEN = ("motor.left.target", "motor.right.target")
+LED_WORDS = 11
+"""The words the LED program applies (top r, g, b, the circle's 8), and copies after them."""
 LED_EVENT = "buttons"
 """The firmware's periodic event (20 Hz on the robot) the LED program runs on."""
 
@@ -60,44 +65,30 @@ class ThymioHardware(Hardware):
     leds: Leds
     calibration: Calibration
     link: str
-
-
-def require(hw: object, *devices: str) -> None:
-    """Raise ``MissingDevice`` naming the first of ``devices`` that ``hw`` lacks.
-
-    A program calls it as it starts (``require(robot.hw, "ground", "sonar")``) so that on
-    hardware without the device it fails at once, in one line, rather than halfway.
-    """
-    for name in devices:
-        if getattr(hw, name, None) is None:
-            has = [f.name for f in fields(hw) if getattr(hw, f.name) is not None]  # type: ignore[arg-type]
-            kind = type(hw).__name__
-            raise MissingDevice(
-                f"this program needs a {name}; the robot's hardware ({kind}) has none "
-                f"(it has: {', '.join(h for h in has if h not in ('id',))})"
-            )
-
-
-class MissingDevice(HardwareLost):
-    """A program needs a device the robot does not have (a camera on a Thymio): said in one
-    line as the program starts. A HardwareLost, so that a run reports it as an expected fault;
-    unlike a lost robot, waiting will not bring the device."""
+    aseba: AsebaLink
+    """The Aseba conversation itself, for what the HAL does not map: any variable by name
+    (``aseba.write("button.center", (1,))``, ``await aseba.read(offset, size, timeout)``)."""
 
 
 def led_program(link: AsebaLink, at: int) -> tuple[int, ...]:
     """Bytecode that, on each ``buttons`` event, sets the top LED from the words ``at``..
     ``at+2`` and the circle from ``at+3``..``at+10`` (the Thymio sets its LEDs through native
-    functions only, so a host writes those words and this program applies them).
+    functions only, so a host writes those words and this program applies them), then copies
+    the 11 words it applied to ``at+11``..``at+21``: what the host reads back as the lights
+    shown (the LEDs themselves are not readable over Aseba).
 
     Aseba bytecode: a table of (event, address) after its own length, then for each native
     call the addresses of its arguments pushed last first (``push.s``, 0x1000), the call
-    (``callnat``, 0xC000) and ``stop`` (0x0000).
+    (``callnat``, 0xC000); each copy a ``load`` (0x3000) and a ``store`` (0x4000); ``stop``
+    (0x0000).
     """
     event = 0xFFFE - link.events.index(LED_EVENT)
     code: list[int] = [3, event, 3]
     for native, first, count in (("leds.top", at, 3), ("leds.circle", at + 3, 8)):
         code += [0x1000 | (first + i) for i in reversed(range(count))]
         code.append(0xC000 | link.natives.index(native))
+    for i in range(LED_WORDS):
+        code += [0x3000 | (at + i), 0x4000 | (at + LED_WORDS + i)]
     code.append(0x0000)
     return tuple(code)
 
@@ -110,9 +101,10 @@ class _Thymio:
     ) -> None:
         self.link, self.cal, self.drive, self.leds, self.timeout = link, cal, drive, leds, timeout
         offsets = [link.variables[n] for n in SENSED]
-        self.start = min(o for o, _ in offsets)
-        self.length = max(o + s for o, s in offsets) - self.start
         self.led_words = link.table_size
+        self.start = min(o for o, _ in offsets)
+        end = max(max(o + s for o, s in offsets), self.led_words + 2 * LED_WORDS)
+        self.length = end - self.start
         self.sent_targets: tuple[int, int] | None = None
         self.sent_leds: tuple[int, ...] | None = None
 
@@ -144,6 +136,7 @@ class _Thymio:
             buttons=tuple(
                 var(f"button.{b}")[0] for b in ("backward", "left", "center", "forward", "right")
             ),
+            leds=words[self.led_words + LED_WORDS - self.start :][:LED_WORDS],
         )
 
     def stop_now(self) -> None:
@@ -163,13 +156,13 @@ async def connect(
 ) -> ThymioHardware:
     """Connect to the Thymio at ``link`` (``tcp:HOST:PORT`` or a serial device) as ``robot_id``.
 
-    ``node``: the Aseba node id (None: the first that answers; several Thymios behind one
-    wireless dongle need it). ``spec``: ``pose`` ([x, y, heading], where odometry starts) and
-    ``calibration`` (:meth:`Calibration.of`). ``tick_period``: seconds between control ticks;
-    ``timeout``: seconds an answer may take before the robot counts as lost. ``locator``
-    makes the radio's locator from the odometry (the default: the odometry itself; see
-    :mod:`robots.thymio` for a lab's tracking system). HardwareLost if the robot is not there
-    or is not a Thymio II.
+    ``node``: the Aseba node id (None: the first that answers; several Thymios on one link, as
+    behind ``asebaswitch``, need it). ``spec``: ``pose`` ([x, y, heading], where odometry
+    starts) and ``calibration`` (:meth:`Calibration.of`). ``tick_period``: seconds between
+    control ticks; ``timeout``: seconds an answer may take before the robot counts as lost.
+    ``locator`` makes the radio's locator from the odometry (the default: the odometry itself;
+    see :mod:`robots.thymio` for a lab's tracking system). HardwareLost if the robot is not
+    there or is not a Thymio II.
     """
     spec = spec or {}
     cal = Calibration.of(spec.get("calibration", {}))
@@ -189,12 +182,14 @@ async def connect(
         await conn.aclose()
         raise
     odometry = ThymioOdometry(cal, first, start)
+    leds.readings = first
     prox, ground, buttons = Proximity(cal, first), Ground(cal, first), Buttons(cal, first)
 
     def took(readings: Readings) -> None:
         odometry.advance(readings)
         for device in (odometry, prox, ground, buttons):
             device.readings = readings
+        leds.readings = readings
 
     clock = ThymioClock(tick_period, first, thymio.exchange, took, thymio.stop_now)
     watch = asyncio.get_running_loop().create_task(conn.wait_lost())
@@ -213,6 +208,7 @@ async def connect(
         leds=leds,
         calibration=cal,
         link=link,
+        aseba=conn,
     )
 
 

@@ -285,6 +285,33 @@ class AsebaLink:
         await asyncio.gather(self._task, return_exceptions=True)
 
 
+async def list_nodes(address: Address, wait: float = 1.0) -> dict[int, str]:
+    """The Aseba nodes that answer at ``address`` within ``wait`` seconds: id → name (the
+    ids to give as ``node`` when several robots share one link, as behind ``asebaswitch``).
+    HardwareLost if nothing listens there."""
+    try:
+        async with asyncio.timeout(wait + 1.0):
+            reader, writer = await _open_stream(address)
+    except (OSError, TimeoutError) as exc:
+        raise HardwareLost(f"no Thymio at {address}: {_why(exc)}") from None
+    link = AsebaLink(address, reader, writer)
+    nodes: dict[int, str] = {}
+    try:
+        link._send(aseba.list_nodes(HOST))
+        with contextlib.suppress(TimeoutError):
+            async with asyncio.timeout(wait):
+                while True:
+                    msg = await link._next()
+                    if msg.type == aseba.NODE_PRESENT and msg.source not in nodes:
+                        nodes[msg.source] = ""
+                        link._send(aseba.get_node_description(HOST, msg.source))
+                    elif msg.type == aseba.DESCRIPTION and msg.source in nodes:
+                        nodes[msg.source] = aseba.decode_description(msg.payload).name
+    finally:
+        await link.aclose()
+    return dict(sorted(nodes.items()))
+
+
 class _Writer(Protocol):
     def write(self, data: bytes) -> None: ...
     def close(self) -> None: ...

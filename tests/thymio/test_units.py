@@ -110,6 +110,8 @@ def test_the_led_program_calls_the_natives_on_the_buttons_event() -> None:
     assert top == (0x1000 | 76, 0x1000 | 75, 0x1000 | 74, 0xC000 | 35)
     circle = code[7:16]
     assert circle[0] == 0x1000 | 84 and circle[7] == 0x1000 | 77 and circle[8] == 0xC000 | 34
+    copies = code[16:-1]  # load word 74+i, store it at 85+i: what was applied, for the host
+    assert copies == tuple(w for i in range(11) for w in (0x3000 | (74 + i), 0x4000 | (85 + i)))
     assert code[-1] == 0
 
 
