@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -45,6 +46,16 @@ def sweep_made(
     it made and the wall time, and (with runs made) ``speed(fresh, wall)``, their speed."""
     made = f"{label}: {len(fresh)} runs made in {time.monotonic() - t0:.0f} s wall"
     return f"{made}\n{speed(fresh, wall)}" if fresh else made
+
+
+def speed(simulated: float, fresh: Sequence[Record], wall: float, unit: str) -> str:
+    """The speed of the runs just made (``fresh``, which took ``wall`` s over the pool and each
+    its ``wall_s``): ``simulated`` seconds of ``unit`` (robot-seconds, say) per wall second of
+    a worker, and over the pool."""
+    cpu = sum(r["wall_s"] for r in fresh)
+    per_worker = simulated / cpu if cpu else math.nan
+    overall = f", {simulated / wall:.0f} over the pool" if wall else ""
+    return f"speed: {per_worker:.0f} simulated {unit} per wall second a worker{overall}"
 
 
 def every_run(seed: int, records: Sequence[Record]) -> str:
