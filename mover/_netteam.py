@@ -36,12 +36,11 @@ import sys
 import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from types import TracebackType
 
 from ._config import TeamCredentials
 from ._impair import ImpairProxy
 from ._netlab import Netlab
-from ._procs import Child, stop
+from ._procs import Child, Processes, stop
 from ._up._plan import Seeds, member_argv, seeds, world_argv
 from ._up._teamfile import TeamPlan
 
@@ -86,7 +85,7 @@ class RunResult:
         return "\n".join(line for _, line in self.lines)
 
 
-class TeamAcrossHosts:
+class TeamAcrossHosts(Processes):
     """The team of ``plan`` on the hosts of ``lab`` (see the module docstring)."""
 
     def __init__(
@@ -132,19 +131,6 @@ class TeamAcrossHosts:
         return self.out / f"{self.plan.world.name}.jsonl"
 
     # -- up ------------------------------------------------------------------------------------
-
-    async def __aenter__(self) -> TeamAcrossHosts:
-        try:
-            await self._start()
-        except BaseException:
-            await self.aclose()
-            raise
-        return self
-
-    async def __aexit__(
-        self, kind: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
-    ) -> None:
-        await self.aclose()
 
     async def _start(self) -> None:
         from .cli._router import generate_config

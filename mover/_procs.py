@@ -21,7 +21,8 @@ import signal
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import IO
+from types import TracebackType
+from typing import IO, Self
 
 from ._orphans import guarded
 
@@ -162,6 +163,35 @@ async def start(
     if log is not None and not pump:
         log.close()  # the child has its own copy
     return Child(name, proc, path, own_session, log if pump else None)
+
+
+class Processes:
+    """A set of processes as an async context: entering starts them (:meth:`_start`), leaving
+    stops them (:meth:`aclose`), and a start that fails half-way stops what it started before
+    the error goes on, so that nothing is left running. ``mover up``'s supervisor and a team
+    across hosts extend it with what they start and how they stop."""
+
+    async def _start(self) -> None:
+        """Start the processes (extended)."""
+        raise NotImplementedError
+
+    async def aclose(self) -> None:
+        """Stop whatever was started (extended; called once the context is left, and after a
+        failed start)."""
+        raise NotImplementedError
+
+    async def __aenter__(self) -> Self:
+        try:
+            await self._start()
+        except BaseException:
+            await self.aclose()
+            raise
+        return self
+
+    async def __aexit__(
+        self, kind: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
+    ) -> None:
+        await self.aclose()
 
 
 async def stop(

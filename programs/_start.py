@@ -7,8 +7,11 @@ from __future__ import annotations
 from mover import RunTeam
 from robots.hal import Clock
 
+#: Ticks between the latest member's tick when the team agreed and the common start.
+START_LEAD = 20
 
-async def common_start(clock: Clock, team: RunTeam, lead: int) -> float:
+
+async def common_start(clock: Clock, team: RunTeam, lead: int = START_LEAD) -> float:
     """Agree with the team on the simulated time at which everyone starts, ``lead`` ticks after
     the latest time any member has seen (one ``and`` step); tick until then and return it."""
 

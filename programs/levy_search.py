@@ -23,8 +23,6 @@ from robots.library import LevyParams, Neighbour, walker
 from ._start import common_start
 
 HERE, FOUND = "levy/here", "levy/found"
-#: Ticks between the latest member's tick when the team agreed and the common start.
-START_LEAD = 20
 
 
 async def levy_search(
@@ -63,7 +61,7 @@ async def levy_search(
     async def now() -> float:
         return hw.clock.now()
 
-    start = await common_start(hw.clock, team, START_LEAD)
+    start = await common_start(hw.clock, team)
 
     def neighbours() -> list[Neighbour]:
         if method != "L+P":

@@ -41,9 +41,6 @@ from robots.stigmergic import (
 
 from ._start import common_start
 
-#: Ticks between the latest member's tick when the team agreed and the common start.
-START_LEAD = 20
-
 
 async def stigmergic_navigation(
     robot: Robot[Any],
@@ -72,7 +69,7 @@ async def stigmergic_navigation(
     if not isinstance(hw, EyeBotHardware | FootBotHardware):
         raise TypeError(f"{robot.id} is neither an eye-bot nor a foot-bot ({type(hw).__name__})")
     rng = np.random.default_rng(team.rng("stigmergic").getrandbits(128))
-    start = await common_start(hw.clock, team, START_LEAD)
+    start = await common_start(hw.clock, team)
     until = start + duration
     wall = time.perf_counter()
 

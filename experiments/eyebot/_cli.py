@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import time
 from dataclasses import replace
@@ -13,8 +12,8 @@ from robots.stigmergic import Reading
 from sim_hw.continuous import TICK
 
 from .._common import add_run_arguments, comma_list, read_run_arguments, runner_parser
-from .._figures import add_figure_arguments
-from .._saved import add_saved_arguments, seeds_table
+from .._runner import add_runner_tail, every_run, save_dir, sweep_made
+from .._saved import seeds_table
 from . import _report
 from ._sweep import FIGURES, EyebotSettings, points, run_points
 
@@ -93,9 +92,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         action="store_true",
         help="the old cluttered arena: 28 eye-bots, 4 of them over its walls (default 24)",
     )
-    add_saved_arguments(parser, "eyebot")
-    add_figure_arguments(parser)
-    parser.set_defaults(func=run)
+    add_runner_tail(parser, "eyebot", run)
 
 
 def settings(args: argparse.Namespace) -> EyebotSettings:
@@ -104,7 +101,7 @@ def settings(args: argparse.Namespace) -> EyebotSettings:
     given = read_run_arguments(args)
     if not (math.isfinite(args.duration) and 10.0 <= args.duration <= MAX_DURATION):
         raise UsageError(f"--duration must be from 10 to {MAX_DURATION:g} s, got {args.duration}")
-    save = None if args.no_save else args.save
+    save = save_dir(args)
     if args.saved and save is None:
         raise UsageError("--saved reports the saved runs: it cannot go with --no-save")
     if not (math.isfinite(args.eyebot_period) and TICK - 1e-9 <= args.eyebot_period <= 60.0):
@@ -159,9 +156,7 @@ def run(args: argparse.Namespace) -> int:
         print(_TABLES[figure](records))
         if figure == "fig2":
             print(_report.fig2_counted(records))
-        print(f"{figure}: {len(fresh)} runs made in {time.monotonic() - t0:.0f} s wall")
-        if fresh:
-            print(_report.speed(fresh, wall))
+        print(sweep_made(figure, fresh, t0, wall, _report.speed))
         if not args.no_plots:
             from ._plots import plot
 
@@ -169,5 +164,5 @@ def run(args: argparse.Namespace) -> int:
             if path is not None:
                 print(f"wrote {path}")
     if args.json:
-        print(json.dumps({"seed": s.seed, "runs": everything}))
+        print(every_run(s.seed, everything))
     return 0

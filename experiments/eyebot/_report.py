@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from .. import _runner
 from .._common import plus_minus, summary
 from ._sweep import DEPLOY_EVERY, FIG3_FOOTBOTS, arena
 
@@ -248,12 +249,9 @@ def _by_run(rows: Records, footbots: int, eyebots: str) -> dict[int, float | Non
 
 
 def speed(records: Records, wall: float) -> str:
-    """Simulated robot-seconds per wall second of the runs just made."""
+    """Simulated foot-bot-seconds per wall second of the runs just made."""
     sim = sum(r["footbots"] * r["duration"] for r in records)
-    cpu = sum(r["wall_s"] for r in records)
-    per_worker = sim / cpu if cpu else math.nan
-    overall = f", {sim / wall:.0f} over the pool" if wall else ""
-    return f"speed: {per_worker:.0f} simulated foot-bot-seconds per wall second a worker{overall}"
+    return _runner.speed(sim, records, wall, "foot-bot-seconds")
 
 
 def _mean(values: Sequence[float | None]) -> float:

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import time
 from dataclasses import replace
@@ -19,8 +18,7 @@ from .._common import (
     runner_parser,
     shown,
 )
-from .._figures import add_figure_arguments
-from .._saved import add_saved_arguments
+from .._runner import add_runner_tail, every_run, save_dir, sweep_made
 from ._checks import checks_report
 from ._paper import (
     ALPHA_TARGETS,
@@ -113,9 +111,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         action="store_true",
         help="L+P: a robot is repelled by the targets it marked itself too (the paper: others)",
     )
-    add_saved_arguments(parser, "levy")
-    add_figure_arguments(parser)
-    parser.set_defaults(func=run)
+    add_runner_tail(parser, "levy", run)
 
 
 def settings(args: argparse.Namespace) -> LevySettings:
@@ -146,7 +142,7 @@ def settings(args: argparse.Namespace) -> LevySettings:
         )
     walk = replace(LevyParams(), **{name: getattr(args, name) for name in _WALK_OPTIONS})
     setup = replace(Setup(), walk=walk, **{name: getattr(args, name) for name in _SETUP_OPTIONS})
-    save = None if args.no_save else args.save
+    save = save_dir(args)
     if save is not None and setup.tag():  # runs of other settings are kept apart
         save = save.with_name(f"{save.name}-{setup.tag()}")
     return LevySettings(
@@ -193,13 +189,11 @@ def run(args: argparse.Namespace) -> int:
             print(saturation(records, s.setup))
         if sweep == "alpha":
             print(theory(s.setup, ALPHA_TARGETS))
-        print(f"{sweep}: {len(fresh)} runs made in {time.monotonic() - t0:.0f} s wall")
-        if fresh:
-            print(speed(fresh, wall))
+        print(sweep_made(sweep, fresh, t0, wall, speed))
         if s.out is not None and sweep not in CHECKS:  # tables only beyond the figures
             from ._plots import plot
 
             print(f"wrote {plot(sweep, records, s.setup, s.out, s.format)}")
     if s.json:
-        print(json.dumps({"seed": s.seed, "runs": everything}))
+        print(every_run(s.seed, everything))
     return 0

@@ -3,13 +3,13 @@ beside the measured one, the saturation with more robots, and the α sweep again
 
 from __future__ import annotations
 
-import math
 from collections import defaultdict
 from collections.abc import Sequence
 from typing import Any
 
 from robots.library import stable_alpha, viswanathan_mu
 
+from .. import _runner
 from .._common import summary
 from ._paper import ORDER, Setup
 
@@ -120,11 +120,7 @@ def theory(setup: Setup, targets: int) -> str:
 
 def speed(records: Records, wall: float) -> str:
     """Simulated robot-seconds per wall second of the runs just made."""
-    fresh = sum(r["robot_s"] for r in records)
-    cpu = sum(r["wall_s"] for r in records)
-    per_core = fresh / cpu if cpu else math.nan
-    overall = f", {fresh / wall:.0f} robot-s per wall s over the pool" if wall else ""
-    return f"speed: {per_core:.0f} simulated robot-seconds per wall second a worker{overall}"
+    return _runner.speed(sum(r["robot_s"] for r in records), records, wall, "robot-seconds")
 
 
 def paired(

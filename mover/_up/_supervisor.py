@@ -28,13 +28,12 @@ import time
 from collections.abc import Awaitable
 from dataclasses import dataclass, field
 from pathlib import Path
-from types import TracebackType
-from typing import IO, Any, TypeVar
+from typing import IO, Any, Self, TypeVar
 
 from .._config import NodeConfig, TeamCredentials, free_port
 from .._exceptions import ConfigError, MoverError
 from .._node import Node
-from .._procs import Child, ProcessExited, start, stop
+from .._procs import Child, Processes, ProcessExited, start, stop
 from .._programs import launch
 from . import _hosts
 from ._plan import ProcessPlan, Seeds, processes, resolved, seeds, uses_router
@@ -71,7 +70,7 @@ class _Child:
         return self.process.proc
 
 
-class Supervisor:
+class Supervisor(Processes):
     """One team, up: ``async with Supervisor(plan, out=run_dir) as up: await up.wait_ready()``.
 
     On entry the run folder is made (with ``team.json``, the file as run) and every process
@@ -128,23 +127,13 @@ class Supervisor:
 
     # -- life ------------------------------------------------------------------------------------
 
-    async def __aenter__(self) -> Supervisor:
+    async def __aenter__(self) -> Self:
         loop = asyncio.get_running_loop()
         self._fault = loop.create_future()
         if self.signals:
             for sig in (signal.SIGINT, signal.SIGTERM):
                 loop.add_signal_handler(sig, self._on_signal, sig)
-        try:
-            await self._start()
-        except BaseException:
-            await self.aclose()
-            raise
-        return self
-
-    async def __aexit__(
-        self, kind: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
-    ) -> None:
-        await self.aclose()
+        return await super().__aenter__()
 
     async def _start(self) -> None:
         try:

@@ -24,6 +24,9 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING, Any
 
+from . import _spec
+from ._spec import *  # noqa: F403  (the world description's parts, light: no pymunk, no numpy)
+
 if TYPE_CHECKING:  # the type checker sees them all; at run time each is imported when used
     from sim_hw._lockstep import RobotDropped
 
@@ -33,19 +36,6 @@ if TYPE_CHECKING:  # the type checker sees them all; at run time each is importe
     from ._hardware import SimHardware, in_process, remote
     from ._kinds import eyebot_in_process, footbot_in_process
     from ._record import Recorder, plot_recording, read_recording
-    from ._spec import (
-        AreaSpec,
-        BoxSpec,
-        CameraSpec,
-        EyeBotSpec,
-        ImmovableSpec,
-        MarkerSpec,
-        ObstacleSpec,
-        OdometrySpec,
-        RobotSpec,
-        SonarSpec,
-        WorldSpec,
-    )
     from ._stepper import WorldServer, serve_world
     from ._world import World
     from ._worldfile import WorldFileError, load_world, parse_robot, parse_world
@@ -54,25 +44,14 @@ __all__ = [
     "DT",
     "STEPS_PER_TICK",
     "TICK",
-    "AreaSpec",
     "Below",
-    "BoxSpec",
-    "CameraSpec",
     "Ceiling",
-    "EyeBotSpec",
-    "ImmovableSpec",
-    "MarkerSpec",
-    "ObstacleSpec",
-    "OdometrySpec",
     "Recorder",
     "RobotDropped",
-    "RobotSpec",
     "SimHardware",
-    "SonarSpec",
     "World",
     "WorldFileError",
     "WorldServer",
-    "WorldSpec",
     "corridor_paths",
     "double_corridor",
     "eyebot_in_process",
@@ -88,6 +67,7 @@ __all__ = [
     "remote",
     "serve_world",
 ]
+__all__ += _spec.__all__
 
 #: Where each public name lives: a robot process that imports only its backend does not load
 #: the world (pymunk) nor numpy through this package (issue 25's leaner robot processes).
@@ -106,17 +86,6 @@ _WHERE = {
     "Recorder": "._record",
     "plot_recording": "._record",
     "read_recording": "._record",
-    "AreaSpec": "._spec",
-    "BoxSpec": "._spec",
-    "CameraSpec": "._spec",
-    "EyeBotSpec": "._spec",
-    "ImmovableSpec": "._spec",
-    "MarkerSpec": "._spec",
-    "ObstacleSpec": "._spec",
-    "OdometrySpec": "._spec",
-    "RobotSpec": "._spec",
-    "SonarSpec": "._spec",
-    "WorldSpec": "._spec",
     "WorldServer": "._stepper",
     "serve_world": "._stepper",
     "DT": "._contract",

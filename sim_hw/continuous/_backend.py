@@ -16,7 +16,7 @@ refuses a join of the wrong kind at once.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
 from robots.hal import Hardware
 from robots.procedures import body_procedures
@@ -35,6 +35,8 @@ if TYPE_CHECKING:
     from mover import Node
     from robots.backend import HardwareBackend
 
+
+K = TypeVar("K", bound=EyeBotHardware | FootBotHardware)
 
 OPTIONS = frozenset({"world", "call_timeout"})
 """What every backend here takes: which world to join, and how long a call to it may take."""
@@ -77,55 +79,40 @@ class ContinuousBackend:
 BACKEND: HardwareBackend[Hardware] = ContinuousBackend()
 
 
-class EyeBotBackend:
-    """Joins a continuous world process as one of its eye-bots; a ``HardwareBackend``."""
+class KindBackend(Generic[K]):
+    """Joins a continuous world process with a ceiling as one of its ``kind`` (an eye-bot or a
+    foot-bot, whose hardware is a ``hardware``); a ``HardwareBackend``."""
 
     options = OPTIONS
 
-    async def connect(
-        self, node: Node, robot_id: str, spec: Mapping[str, Any], **options: Any
-    ) -> EyeBotHardware:
-        """Join the world ``world`` (default ``"world"``) as the eye-bot ``robot_id`` (one of
-        its file's ``[[eyebots]]``; ``spec`` must be empty). ``call_timeout`` as for ``sim``."""
-        hw = await join_remote(
-            node,
-            robot_id,
-            EYEBOT,
-            spec,
-            **_link(options),
-        )
-        assert isinstance(hw, EyeBotHardware)
-        return hw
-
-    def procedures(self, hw: EyeBotHardware) -> Mapping[str, Callable[..., Any]]:
-        """``robot.pose``, ``robot.stop``, ``robot.sense`` of an eye-bot."""
-        return eyebot_procedures(hw)
-
-
-class FootBotBackend:
-    """Joins a continuous world process with a ceiling as a foot-bot; a ``HardwareBackend``."""
-
-    options = OPTIONS
+    def __init__(
+        self,
+        kind: str,
+        hardware: type[K],
+        procedures: Callable[[K], Mapping[str, Callable[..., Any]]],
+    ) -> None:
+        self.kind = kind
+        self.hardware: type[K] = hardware
+        self._procedures: Callable[[K], Mapping[str, Callable[..., Any]]] = procedures
 
     async def connect(
         self, node: Node, robot_id: str, spec: Mapping[str, Any], **options: Any
-    ) -> FootBotHardware:
-        """Join the world ``world`` (default ``"world"``) as the foot-bot ``robot_id`` with
+    ) -> K:
+        """Join the world ``world`` (default ``"world"``) as ``robot_id`` of this kind: an
+        eye-bot is one of its file's ``[[eyebots]]`` (``spec`` must be empty), a foot-bot has
         body ``spec`` (over the world file's). ``call_timeout`` as for ``sim``."""
-        hw = await join_remote(
-            node,
-            robot_id,
-            FOOTBOT,
-            spec,
-            **_link(options),
-        )
-        assert isinstance(hw, FootBotHardware)
+        hw = await join_remote(node, robot_id, self.kind, spec, **_link(options))
+        assert isinstance(hw, self.hardware)
         return hw
 
-    def procedures(self, hw: FootBotHardware) -> Mapping[str, Callable[..., Any]]:
-        """``robot.pose``, ``robot.stop``, ``robot.sense`` of a foot-bot."""
-        return footbot_procedures(hw)
+    def procedures(self, hw: K) -> Mapping[str, Callable[..., Any]]:
+        """``robot.pose``, ``robot.stop``, ``robot.sense`` of a robot of this kind."""
+        return self._procedures(hw)
 
 
-EYEBOT_BACKEND: HardwareBackend[EyeBotHardware] = EyeBotBackend()
-FOOTBOT_BACKEND: HardwareBackend[FootBotHardware] = FootBotBackend()
+EYEBOT_BACKEND: HardwareBackend[EyeBotHardware] = KindBackend(
+    EYEBOT, EyeBotHardware, eyebot_procedures
+)
+FOOTBOT_BACKEND: HardwareBackend[FootBotHardware] = KindBackend(
+    FOOTBOT, FootBotHardware, footbot_procedures
+)

@@ -28,6 +28,7 @@ from robots.hal import (
 )
 from sim_hw import _link
 from sim_hw._link import WorldLink
+from sim_hw._robot import ClockView, TickedRobot
 from sim_hw._ticks import Ticks
 
 from ._contract import TICK, Command, Readings
@@ -45,7 +46,7 @@ MOVED = 0.02
 """Displacement (m) above which a pushed object counts as moved."""
 
 
-class SimHardware:
+class SimHardware(TickedRobot):
     """Command buffer and clock of one simulated robot; its devices are views of it."""
 
     tick_period = TICK
@@ -98,28 +99,11 @@ class SimHardware:
         self._floor = None
         return command
 
-    def _stopped(self) -> Command:
+    def _idle(self) -> Command:
         """Stop the drive: the command an idle robot stands on."""
         self.stop()
         self._push = None
         return {"v": 0.0, "w": 0.0, "push": None}
-
-    def idling(self) -> contextlib.AbstractAsyncContextManager[None]:
-        """Be idle for the block: the drive stopped, a lock-step world not waiting for us."""
-        return self._ticks.idling(self._stopped)
-
-    def reach(self, t: float) -> float:
-        """How far past ``t`` this robot surely gets: ``t``, or later with a control delay
-        (see ``Ticks.reach``)."""
-        return self._ticks.reach(t)
-
-    def hold(self, t: float | None) -> None:
-        """Hand in nothing on readings later than ``t`` until ``hold(None)`` (see ``Ticks``)."""
-        self._ticks.hold(t)
-
-    async def passed(self, t: float) -> None:
-        """Return once a command was handed in at a tick after simulated time ``t``."""
-        await self._ticks.passed(t)
 
     async def sleep(self, dt: float) -> None:
         """Tick until ``dt`` simulated seconds have passed (at least one tick)."""
@@ -257,12 +241,12 @@ class SimHardware:
 # Thin device views, so that each HAL protocol exposes only its own methods.
 
 
-class _Clock:
+class _Clock(ClockView):
     tick_period = TICK
 
     def __init__(self, hw: SimHardware) -> None:
+        super().__init__(hw)
         self.now, self.tick, self.sleep, self.ticking = hw.now, hw.tick, hw.sleep, hw.ticking
-        self.idling, self.passed, self.hold, self.reach = hw.idling, hw.passed, hw.hold, hw.reach
 
 
 class _Drive:

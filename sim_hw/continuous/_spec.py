@@ -10,6 +10,21 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+#: The parts of a world description, re-exported by ``sim_hw.continuous`` (named here once).
+__all__ = [
+    "AreaSpec",
+    "BoxSpec",
+    "CameraSpec",
+    "EyeBotSpec",
+    "ImmovableSpec",
+    "MarkerSpec",
+    "ObstacleSpec",
+    "OdometrySpec",
+    "RobotSpec",
+    "SonarSpec",
+    "WorldSpec",
+]
+
 Vec = tuple[float, float]
 Pose = tuple[float, float, float]
 

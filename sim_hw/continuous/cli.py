@@ -13,12 +13,19 @@ import asyncio
 import logging
 import math
 import os
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from mover import NameTaken
 from mover.cli import UsageError, positive
 from sim_hw._process import add_world_arguments, control_delay, rate, ready_line
+
+if TYPE_CHECKING:
+    from mover import Node
+
+    from ._record import Recorder
+    from ._stepper import WorldServer
 
 log = logging.getLogger("sim_hw.continuous.cli")
 
@@ -124,12 +131,12 @@ def run_world(args: argparse.Namespace) -> int:
     return 0
 
 
-def _recording(recorder: Any) -> Any:
+def _recording(recorder: Recorder) -> Callable[[Node, WorldServer], None]:
     """``serve_world``, plus a watch of the robots' program phases for ``recorder``."""
     from . import serve_world
     from ._phases import watch_phases
 
-    def export(node: Any, server: Any) -> None:
+    def export(node: Node, server: WorldServer) -> None:
         serve_world(node, server)
         task = asyncio.ensure_future(watch_phases(node, server.door.stepper.robots, recorder.phase))
         _KEEP.append(task)

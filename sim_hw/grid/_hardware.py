@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, Any
 from robots.grid_hal import OFFSETS, GridHardware, Here, Near, Seen
 from sim_hw import _link
 from sim_hw._link import WorldLink
+from sim_hw._robot import ClockView, TickedRobot
 from sim_hw._ticks import Ticks
 
 if TYPE_CHECKING:
@@ -32,7 +33,7 @@ if TYPE_CHECKING:
 _OWNER: contextvars.ContextVar[object | None] = contextvars.ContextVar("grid_owner", default=None)
 
 
-class GridRobot:
+class GridRobot(TickedRobot):
     """Perception cache, action buffer and round clock of one grid robot."""
 
     def __init__(
@@ -123,26 +124,10 @@ class GridRobot:
     async def _wait_change(self) -> None:
         await self._changed.wait()
 
-    def idling(self) -> contextlib.AbstractAsyncContextManager[None]:
-        """Be idle for the block: the robot stays, a lock-step world does not wait for it."""
-        return self._ticks.idling(self._stay)
-
-    def _stay(self) -> dict[str, Any]:
+    def _idle(self) -> dict[str, Any]:
+        """The robot stays: the action an idle robot stands on."""
         self._action.pop("move", None)
         return {}
-
-    def reach(self, t: float) -> float:
-        """How far past ``t`` this robot surely gets: ``t``, or later with a control delay
-        (see ``Ticks.reach``)."""
-        return self._ticks.reach(t)
-
-    def hold(self, t: float | None) -> None:
-        """Hand in nothing on readings later than ``t`` until ``hold(None)`` (see ``Ticks``)."""
-        self._ticks.hold(t)
-
-    async def passed(self, t: float) -> None:
-        """Return once an action was handed in for a round after round ``t``."""
-        await self._ticks.passed(t)
 
     @contextlib.asynccontextmanager
     async def owned(self, at: int) -> AsyncIterator[None]:
@@ -271,11 +256,11 @@ class GridRobot:
 # Thin device views, so that each HAL protocol exposes only its own methods.
 
 
-class _Clock:
+class _Clock(ClockView):
     def __init__(self, robot: GridRobot) -> None:
-        self.now, self.ended, self.tick = robot.now, robot.ended, robot.tick
-        self.owned, self.idling = robot.owned, robot.idling
-        self.hold, self.passed, self.reach = robot.hold, robot.passed, robot.reach
+        super().__init__(robot)
+        self.now, self.ended = robot.now, robot.ended
+        self.tick, self.owned = robot.tick, robot.owned
 
 
 class _Drive:

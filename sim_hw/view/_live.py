@@ -23,6 +23,7 @@ import logging
 import secrets
 import uuid
 from collections.abc import Callable
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -83,6 +84,7 @@ def close_recording(rec: rr.RecordingStream) -> None:
     rec.disconnect()
 
 
+@dataclass(kw_only=True, eq=False)
 class LiveView:
     """Watch world ``world`` (None: the team's world, whatever its name) and draw it.
 
@@ -90,21 +92,12 @@ class LiveView:
     a ``.rrd`` file for the first session (later sessions get ``NAME-2.rrd``, ...).
     """
 
-    def __init__(
-        self,
-        *,
-        world: str | None,
-        grpc_url: str | None,
-        record: Path | None = None,
-        links: float | None = None,
-        say: Callable[[str], None] = print,
-    ) -> None:
-        self.world = world
-        self.grpc_url = grpc_url
-        self.record = record
-        self.links = links
-        self.say = say
-        self.sessions = 0
+    world: str | None
+    grpc_url: str | None
+    record: Path | None = None
+    links: float | None = None
+    say: Callable[[str], None] = print
+    sessions: int = field(default=0, init=False)
 
     async def run(self, team: TeamCredentials, config: NodeConfig) -> None:
         """Watch until cancelled."""

@@ -4,14 +4,15 @@
 The packages import each other in one direction only, never in a circle: mover <- robots <-
 sim_hw <- experiments, and programs <- mover, robots. Each package's third-party imports are the
 ones its row of the packages table names. ``sim_hw`` takes from ``robots`` only the interface a
-world needs to simulate a robot, never a behaviour. The packages above ``mover`` use three of its
-private modules, named. The node's parts never import the node, and
-one module of mover turns zenoh's threads into asyncio.
+world needs to simulate a robot, never a behaviour. The packages above ``mover`` use only the
+private modules of it that the page's table names (read from the page). The node's parts never
+import the node, and one module of mover turns zenoh's threads into asyncio.
 """
 
 from __future__ import annotations
 
 import ast
+import re
 import sys
 from pathlib import Path
 
@@ -61,19 +62,29 @@ ROBOTS_MESSAGES = {
     "robots.stigmergic._footbot": {"Heard"},
 }
 
-#: The private modules of mover that the packages above it may use (docs/architecture.md says
-#: why): the table reader, a finished task's error, and ``mover up``'s plan for ``mover demo``.
-MOVER_INTERNALS = {
-    "robots": {
-        "mover._futures",
-        "mover._endpoints",
-        "mover._orphans",
-        "mover._up",  # robots.thymio.playground: the Playground file's robots and ports, one reader
-    },
-    "sim_hw": {"mover._tables", "mover._keylines", "mover._futures", "mover._endpoints"},
-    "programs": set(),
-    "experiments": {"mover._up"},
-}
+#: The page whose table names the private modules of mover that the packages above it use.
+ARCHITECTURE = ROOT / "docs" / "architecture.md"
+INTERNALS_HEADER = "| internal | used by | why |"
+
+
+def mover_internals(page: str) -> dict[str, set[str]]:
+    """The internals table's ``internal | used by`` columns of docs/architecture.md, read: for
+    each package above mover, the private modules of mover it may use."""
+    lines = page.splitlines()
+    assert INTERNALS_HEADER in lines, f"{ARCHITECTURE.name} has no table {INTERNALS_HEADER!r}"
+    internals: dict[str, set[str]] = {p: set() for p in PACKAGES if p != "mover"}
+    for line in lines[lines.index(INTERNALS_HEADER) + 2 :]:
+        if not line.startswith("|"):
+            break
+        modules, users = (re.findall(r"`([^`]+)`", cell) for cell in line.split("|")[1:3])
+        assert modules and users, f"{ARCHITECTURE.name}: a row without names: {line[:60]}"
+        for package in users:
+            assert package in internals, (
+                f"{ARCHITECTURE.name}: {package!r} is no package above mover"
+            )
+            internals[package].update(modules)
+    return internals
+
 
 #: The parts a node is made of (``mover._node`` gives each its SessionState).
 NODE_PARTS = ("_session", "_membership", "_rpc", "_radio", "_bridge", "_wire", "_keys")
@@ -199,17 +210,38 @@ def test_sim_hw_takes_only_the_robots_interface_never_a_behaviour() -> None:
         assert not _is_behaviour(module, name), f"{sorted(places)}: {module}.{name}"
 
 
-def test_the_packages_above_mover_use_only_its_named_internals() -> None:
-    seen = set()
-    for package, internals in MOVER_INTERNALS.items():
+def test_the_packages_above_mover_use_only_the_internals_the_page_names() -> None:
+    named = mover_internals(ARCHITECTURE.read_text())
+    used: dict[str, set[str]] = {p: set() for p in named}
+    for package, internals in named.items():
         for path in _files(package):
             for line, module in imports(path):
                 parts = module.split(".")
                 if parts[0] == "mover" and any(p.startswith("_") for p in parts[1:]):
-                    seen.add(module)
                     top = ".".join(parts[:2])
                     assert top in internals, f"{_where(path)}:{line} imports {module}"
-    assert "mover._tables" in seen, "the check sees the imports of mover's internals"
+                    used[package].add(top)
+    assert "mover._tables" in used["sim_hw"], "the check sees the imports of mover's internals"
+    for package, internals in named.items():  # and the page names none that is not used
+        assert internals <= used[package], (
+            f"{package} uses none of {sorted(internals - used[package])}"
+        )
+
+
+def test_the_internals_table_is_read_row_by_row() -> None:
+    page = f"""text
+{INTERNALS_HEADER}
+|---|---|---|
+| `mover._a`, `mover._b` | `sim_hw` | why |
+| `mover._c` | `robots`, `experiments` | why, with `code` |
+
+after"""
+    assert mover_internals(page) == {
+        "robots": {"mover._c"},
+        "sim_hw": {"mover._a", "mover._b"},
+        "programs": set(),
+        "experiments": {"mover._c"},
+    }
 
 
 def test_the_behaviour_check_sees_through_re_exports() -> None:

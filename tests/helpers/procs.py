@@ -40,3 +40,16 @@ async def cluster(team: TeamCredentials | None = None) -> AsyncIterator[Cluster]
         yield c
     finally:
         await c.stop()
+
+
+async def terminate(proc: asyncio.subprocess.Process, grace: float) -> None:
+    """End ``proc`` (if it still runs): SIGTERM, at most ``grace`` s for it to exit, then
+    SIGKILL; return once it has ended (a test leaves no process behind)."""
+    if proc.returncode is not None:
+        return
+    proc.terminate()
+    try:
+        await asyncio.wait_for(proc.wait(), grace)
+    except TimeoutError:
+        proc.kill()
+        await proc.wait()

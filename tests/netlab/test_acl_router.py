@@ -20,6 +20,7 @@ from mover import Node, NodeConfig, TeamCredentials
 from mover._config import _read_overrides, free_port
 from mover.cli._acl import team_acl
 from mover.cli._router import generate_config
+from tests.helpers.procs import terminate
 
 pytestmark = pytest.mark.processes
 
@@ -55,12 +56,7 @@ async def router(config: Path) -> AsyncIterator[None]:
         assert line.startswith(b"router "), line
         yield
     finally:
-        proc.terminate()
-        try:
-            await asyncio.wait_for(proc.wait(), 20)
-        except TimeoutError:
-            proc.kill()
-            await proc.wait()
+        await terminate(proc, 20)
 
 
 def _config(tls: Path, cert: str) -> NodeConfig:

@@ -20,6 +20,7 @@ from sim_hw import read_recording
 from sim_hw.grid import Grid, GridServer, GridWorld
 from sim_hw.grid._mcap import GridMcapSink
 from sim_hw.view._scene import grid_state
+from tests.recording._rosbags import by_topic
 
 ROOT = Path(__file__).resolve().parents[2]
 EAST, WEST = 1, 3
@@ -64,15 +65,8 @@ def run(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, list[dict[str, 
 def test_rosbags_reads_occupancy_grids_of_the_cells_and_floor_each_round(
     run: tuple[Path, list[dict[str, Any]]],
 ) -> None:
-    from rosbags.highlevel import AnyReader
-
     path, frames = run
-    got: dict[str, list[tuple[int, str, Any]]] = {}
-    with AnyReader([path]) as reader:
-        for conn, t, raw in reader.messages():
-            got.setdefault(conn.topic, []).append(
-                (t, conn.msgtype, reader.deserialize(raw, conn.msgtype))
-            )
+    got = by_topic(path)
     # round 0 is written when the recording starts, before the robots join
     cells = got["/grid/cells"]
     assert {kind for _, kind, _ in cells} == {"nav_msgs/msg/OccupancyGrid"}

@@ -19,6 +19,7 @@ pytest.importorskip("rosbags", reason="needs rosbags (the test extra)")
 
 from sim_hw import Recorder, World, WorldServer, in_process, load_world, read_recording
 from sim_hw.continuous._walker import random_walk
+from tests.recording._rosbags import by_topic
 
 ROOT = Path(__file__).resolve().parents[2]
 ROBOTS = ("r1", "r2")
@@ -55,24 +56,12 @@ def runs(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
     return folder / "run.jsonl", folder / "run.mcap"
 
 
-def _by_rosbags(path: Path) -> dict[str, list[tuple[int, str, Any]]]:
-    from rosbags.highlevel import AnyReader
-
-    got: dict[str, list[tuple[int, str, Any]]] = {}
-    with AnyReader([path]) as reader:
-        for conn, t, raw in reader.messages():
-            got.setdefault(conn.topic, []).append(
-                (t, conn.msgtype, reader.deserialize(raw, conn.msgtype))
-            )
-    return got
-
-
 def test_rosbags_reads_the_topics_types_and_poses_of_the_json_lines_run(
     runs: tuple[Path, Path],
 ) -> None:
     jsonl, mcap = runs
     header, ticks = read_recording(jsonl)
-    got = _by_rosbags(mcap)
+    got = by_topic(mcap)
     for rid in ROBOTS:
         types = {
             f"/{rid}/pose": "geometry_msgs/msg/PoseStamped",
@@ -145,7 +134,7 @@ def test_replay_exports_a_json_lines_recording_as_mcap(
     )
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == str(out)
-    got = _by_rosbags(out)
+    got = by_topic(out)
     _, ticks = read_recording(jsonl)
     assert [m[2].pose.position.x for m in got["/r2/pose"]] == [
         t["robots"]["r2"][0] for t in ticks if "r2" in t["robots"]

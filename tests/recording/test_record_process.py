@@ -8,7 +8,6 @@ from __future__ import annotations
 import asyncio
 import signal
 from pathlib import Path
-from typing import Any
 
 import pytest
 
@@ -18,23 +17,12 @@ pytest.importorskip("rosbags", reason="needs rosbags (the test extra)")
 from mover import Node, launch
 from mover.pytest_plugin import Starter
 from mover.testing import Cluster
+from tests.recording._rosbags import by_topic
 
 pytestmark = pytest.mark.processes
 
 WORLD = "../../examples/my_program/worlds/two_robots.toml"  # ada and bob
 ROBOTS = ("ada", "bob")
-
-
-def _read(path: Path) -> dict[str, list[tuple[int, str, Any]]]:
-    from rosbags.highlevel import AnyReader
-
-    got: dict[str, list[tuple[int, str, Any]]] = {}
-    with AnyReader([path]) as reader:
-        for conn, t, raw in reader.messages():
-            got.setdefault(conn.topic, []).append(
-                (t, conn.msgtype, reader.deserialize(raw, conn.msgtype))
-            )
-    return got
 
 
 async def test_a_world_process_records_poses_commands_and_program_phases(
@@ -53,7 +41,7 @@ async def test_a_world_process_records_poses_commands_and_program_phases(
     await asyncio.sleep(1.5)  # the world's next asks of the robots hear their runs' ends
     mover_cluster.kill(world, signal.SIGINT)  # Ctrl-C: the world ends the file
     await asyncio.wait_for(world.wait(), 30)
-    got = _read(path)
+    got = by_topic(path)
     ticks = len(got["/tf"])
     assert ticks > 1
     for rid in ROBOTS:

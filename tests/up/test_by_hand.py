@@ -20,7 +20,7 @@ import pytest
 
 from mover import Node, NodeConfig, TeamCredentials
 from mover._endpoints import bound, join_hint
-from tests.helpers.procs import ROOT
+from tests.helpers.procs import ROOT, terminate
 
 pytestmark = pytest.mark.processes
 
@@ -60,13 +60,7 @@ async def started(*args: str, env: dict[str, str]) -> AsyncIterator[asyncio.subp
     try:
         yield proc
     finally:
-        if proc.returncode is None:
-            proc.terminate()
-            try:
-                await asyncio.wait_for(proc.wait(), 15)
-            except TimeoutError:
-                proc.kill()
-                await proc.wait()
+        await terminate(proc, 15)
 
 
 async def lines_until(proc: asyncio.subprocess.Process, pattern: str, timeout: float) -> list[str]:
