@@ -3,12 +3,12 @@ bound, not a pause (one liveliness query, then the holders' hellos).
 
 Not a timed test of the verbs' speed: the issue's targets (`mover ps` within 1 s, `mover call`
 within 0.5 s) are `bench/team.py`'s ``ps_wall_s_10`` and ``call_wall_s``, measured on a quiet
-machine. Here each verb's time is compared with a baseline measured in the same test under the
-same load — the CLI's own start, `mover --help` (0.6–0.75 s on the shared machine, load about 1, as
-long as the verbs themselves: 0.2–0.75 s) — and what it takes beyond that must be a small part of
-its bound. A verb that waited its bound would take ``BOUND`` more than the baseline; one that
-answers takes about the baseline. The margin (a tenth of the bound, 3 s) is there for a loaded
-2-core machine, where the verb waits on the robots' answers as well as on its own start.
+machine. Here each verb's time is compared with a baseline measured in the same test under the same
+load — the CLI's own start, `mover --help` (0.6–0.75 s on the shared machine, load about 1, as long
+as the verbs themselves: 0.2–0.75 s) — and what it takes beyond that must be a small part of its
+bound. A verb that waited its bound would take ``BOUND`` more than the baseline; one that answers
+takes about the baseline. The margin (a tenth of the bound, 3 s) is there for a loaded 2-core
+machine, where the verb waits on the robots' answers as well as on its own start.
 """
 
 from __future__ import annotations
