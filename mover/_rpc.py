@@ -6,6 +6,14 @@ A call is a zenoh ``get`` on ``mover/<team>/rpc/<robot>`` carrying a sealed ``ca
 caller's await sends a sealed ``cancel`` to the callee, which cancels the procedure's task (its
 ``finally`` runs). A call to a member that leaves the team mid-call fails with RobotLost; a
 caller that leaves has its calls cancelled on the callee.
+
+A call reaches every queryable on the callee's key, an outsider's too, and an outsider can send
+the frame on to the callee, sooner than the original if its path is faster. The callee admits
+each call once (``Sessions``) and runs it once; it keeps the sealed answer of each call admitted
+lately (:class:`_Answers`) and answers a copy of that call, whichever came first, with the same
+sealed bytes, so an outsider that drops the answer to its copy leaves the caller's own query
+answered all the same. The answer is sealed for the caller's session and opened once: handing it
+to any query gives an outsider nothing it could not relay anyway (docs/security.md).
 """
 
 from __future__ import annotations
@@ -46,6 +54,15 @@ F = TypeVar("F", bound=Callable[..., Any])
 _MARK = "__mover_procedure__"
 # How long zenoh keeps a call open when the caller set no timeout; liveliness ends it sooner.
 _NO_TIMEOUT = 7 * 24 * 3600.0
+ANSWERS_KEPT = 10.0
+"""Seconds at most a sealed answer is kept for a copy of its call (at least half of that)."""
+ANSWERS_COUNT = 512
+"""Answers kept at most per half of :data:`ANSWERS_KEPT` (twice that in all)."""
+ANSWERS_BYTES = 4 * 1024 * 1024
+"""Bytes of answers kept at most per half (one larger answer is kept alone)."""
+WAITING = 8
+"""Copies of one running call held at most until its answer (the rest: an unsigned refusal)."""
+_GONE = object()
 
 
 def procedure(fn: F | None = None, *, name: str | None = None) -> Any:
@@ -90,6 +107,7 @@ class RpcServer:
         self.exports: dict[str, Exported] = {}
         self.tasks: dict[tuple[str, int], asyncio.Task[None]] = {}
         self._asked: dict[tuple[str, int], bool] = {}  # calls their caller asked to cancel
+        self.answers = _Answers()
 
     def export(self, fn: Callable[..., Any], name: str | None = None) -> None:
         name = name or getattr(fn, _MARK, None) or fn.__name__
@@ -106,6 +124,16 @@ class RpcServer:
                 raise EnvelopeRefused(f"a {env.kind!r} envelope is not a call", env)
             state.peers.admit(env, state.name, state.sealer.epoch)
         except WireError as exc:
+            if (
+                type(exc) is EnvelopeRefused
+                and exc.envelope.kind == "call"
+                and self.answers.again(query, exc.envelope.nonce, self._reply)
+            ):
+                # A copy of a call admitted lately (an outsider's, or the original after an
+                # outsider's copy): the same sealed answer, now or when the call ends.
+                state.stats["answered.again"] += 1
+                state.faults.warn("rpc", f"answered a copy of a call again: {exc}")
+                return
             state.stats["refused"] += 1
             state.faults.warn("rpc", f"refused a call: {exc}")
             if isinstance(exc, SessionChanged) and exc.envelope.kind == "call":
@@ -134,6 +162,7 @@ class RpcServer:
             awaitable = result
         else:
             awaitable = exported.fn(*args, **kwargs)
+        self.answers.running(env.nonce)  # a copy that comes meanwhile waits for the answer
         task = asyncio.get_running_loop().create_task(self._serve(query, env, exported, awaitable))
         self.tasks[(env.sender, env.call_id)] = task
 
@@ -214,21 +243,29 @@ class RpcServer:
 
     def _send(self, query: zenoh.Query, env: Envelope, reply: dict[str, Any]) -> None:
         state = self.state
+        try:
+            frame = state.sealer.seal(
+                "reply", reply, env.call_id, to=env.sender, to_epoch=env.epoch
+            )
+        except WireError as exc:
+            failed = _err("WireError", f"cannot send the result: {exc}")
+            frame = state.sealer.seal(
+                "reply", failed, env.call_id, to=env.sender, to_epoch=env.epoch
+            )
+        self._reply(query, frame)
+        waiting = self.answers.keep(env.nonce, frame)
+        if waiting is not None:  # copies of the call that came while it ran
+            for other in waiting:
+                self._reply(other, frame)
+
+    def _reply(self, query: zenoh.Query, frame: bytes | bytearray) -> None:
+        state = self.state
         with query:
-            try:
-                frame = state.sealer.seal(
-                    "reply", reply, env.call_id, to=env.sender, to_epoch=env.epoch
-                )
-            except WireError as exc:
-                failed = _err("WireError", f"cannot send the result: {exc}")
-                frame = state.sealer.seal(
-                    "reply", failed, env.call_id, to=env.sender, to_epoch=env.epoch
-                )
             try:
                 query.reply(_keys.rpc(state.team, state.name), frame, express=True)
                 state.stats["sent.reply"] += 1
             except Exception as exc:  # the session is closing, or the caller is gone
-                log.debug("could not reply to %r: %s", env.sender, exc)
+                log.debug("could not reply to %s: %s", query.key_expr, exc)
 
     def cancel(self, caller: str, call_id: int | None = None) -> None:
         """Cancel one call of ``caller`` (or all of them)."""
@@ -256,6 +293,91 @@ class RpcServer:
         for task in tasks:
             task.cancel()
         await asyncio.gather(*tasks, return_exceptions=True)
+        self.answers.clear()
+
+
+class _Answers:
+    """The sealed answers of the calls admitted lately, by the call's nonce, for copies of them.
+
+    Two generations of dicts, the older dropped whole when the newer is turned (every
+    ``ANSWERS_KEPT / 2`` seconds, by a timer armed while any answer is kept, or sooner at
+    ``ANSWERS_COUNT`` answers or ``ANSWERS_BYTES``): an answer is kept from half that long to
+    that long, and a call costs one dict entry (no timestamp, no object of its own). A call
+    still running has ``None`` (no copy waiting) or the list of the copies' queries waiting.
+    """
+
+    def __init__(self) -> None:
+        self._new: dict[bytes, Any] = {}
+        self._old: dict[bytes, Any] = {}
+        self._bytes = 0
+        self._timer: asyncio.TimerHandle | None = None
+
+    def __len__(self) -> int:
+        return len(self._new) + len(self._old)
+
+    def running(self, nonce: bytes) -> None:
+        """The call ``nonce`` was admitted and runs (its answer comes later)."""
+        self._room(0)
+        self._new[nonce] = None
+
+    def keep(self, nonce: bytes, frame: bytes | bytearray) -> list[zenoh.Query] | None:
+        """Keep the sealed answer of call ``nonce``; the copies' queries that waited for it."""
+        waiting = self._new.get(nonce)
+        if waiting is None and self._old:
+            waiting = self._old.pop(nonce, None)
+        self._room(len(frame))
+        self._new[nonce] = frame
+        self._bytes += len(frame)
+        return waiting
+
+    def again(
+        self,
+        query: zenoh.Query,
+        nonce: bytes,
+        reply: Callable[[zenoh.Query, bytes | bytearray], None],
+    ) -> bool:
+        """Answer a copy of call ``nonce``: at once if answered, when it is if it runs; False
+        if the call is not known (or too many copies wait)."""
+        held = self._new.get(nonce, _GONE)
+        where = self._new
+        if held is _GONE:
+            held, where = self._old.get(nonce, _GONE), self._old
+        if held is _GONE:
+            return False
+        if held is None:
+            where[nonce] = [query]
+        elif isinstance(held, list):
+            if len(held) >= WAITING:
+                return False
+            held.append(query)
+        else:
+            reply(query, held)
+        return True
+
+    def _room(self, size: int) -> None:
+        if len(self._new) >= ANSWERS_COUNT or self._bytes + size > ANSWERS_BYTES:
+            self._turn()
+        if self._timer is None:
+            self._timer = asyncio.get_running_loop().call_later(ANSWERS_KEPT / 2, self._tick)
+
+    def _tick(self) -> None:
+        self._timer = None
+        self._turn()
+        if self._new or self._old:
+            self._timer = asyncio.get_running_loop().call_later(ANSWERS_KEPT / 2, self._tick)
+
+    def _turn(self) -> None:
+        self._old, self._new = self._new, {}
+        self._bytes = 0
+
+    def clear(self) -> None:
+        """Forget every answer (the node closes)."""
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
+        self._new.clear()
+        self._old.clear()
+        self._bytes = 0
 
 
 def _err(kind: str, message: str) -> dict[str, Any]:

@@ -16,6 +16,7 @@ import logging
 import sys
 from collections.abc import Sequence
 from importlib.metadata import entry_points
+from typing import NoReturn
 
 from .._exceptions import ConfigError
 from . import Terminated, UsageError, add_log_arguments, interrupt_on_sigterm, setup_logging
@@ -25,10 +26,18 @@ __all__ = ["build_parser", "main"]
 log = logging.getLogger("mover.cli")
 
 
+class _Parser(argparse.ArgumentParser):
+    """A parser whose error is one line, naming where to find the usage (argparse prints the
+    usage first, several lines). Its sub-parsers are of this class too."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def build_parser(verb: str | None = None) -> argparse.ArgumentParser:
     """The parser with verb ``verb`` only if it names one that loads (so that ``mover ps``
     imports nothing of the worlds or experiments), else with every verb that loads."""
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="mover", description="Program a team of mobile robots as one distributed program."
     )
     add_log_arguments(parser)

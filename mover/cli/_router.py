@@ -44,9 +44,10 @@ CLOSE_BOUND = 10.0
 
 HANDSHAKE_TIMEOUT_MS = 1000
 """Milliseconds the router gives a connection to finish its TLS handshake (zenoh's default is
-10 s). Zenoh's TLS listener handshakes at most 64 connections at a time, in the order they
-came; an idle connection holds its slot this long, so 1000 idle ones hold back a new member by
-about 1000 / 64 x this (docs/security.md has the measurement)."""
+10 s): an idle connection is let go this soon. It does not bound starvation by idle
+connections: zenoh's TLS accept loop sleeps 100 ms after every failed handshake (a constant,
+no setting), so 1000 idle ones hold back a new member for about 100 s whatever this is;
+docs/security.md has the measurement and the operator's remedy (a per-source limit)."""
 TRANSPORT = {
     "accept_timeout": 2000,  # zenoh's own handshake after TLS (default 10 s)
     "accept_pending": 100,  # links in that handshake at once (zenoh's default)

@@ -321,4 +321,6 @@ async def test_a_bad_input_gets_one_line(
         line for line in got.err.splitlines() if line.startswith("mover") and got.said in line
     ]
     assert len(errors) == 1, text  # said once, in one line
+    written = [line for line in got.err.splitlines() if line.strip()]
+    assert len(written) <= 1, got.err  # and nothing else: no warning or log line beside it
     assert got.took < bound

@@ -1,7 +1,9 @@
 """A leaked workstation certificate without the team key, across hosts: the outsider (host d)
 connects to the router with it and declares queryables and a subscriber on a robot's keys
-(exactly and by wildcard); the router never hands it a robot's call or control message, and
-search and rescue completes (hosts a: router and world, b: robots, c: ``mover run``)."""
+(exactly and by wildcard), answering every query it gets; the router never hands it a robot's
+call or control message, so a member asking ``rpc/elvis`` and ``hello/elvis`` never gets its
+answer, and search and rescue completes (hosts a: router and world, b: robots, c: ``mover
+run`` and the member's probe)."""
 
 from __future__ import annotations
 
@@ -32,6 +34,8 @@ def hear(what):
     def count(m):
         key = f"{what} {m.key_expr}"
         heard[key] = heard.get(key, 0) + 1
+        if what == "query":
+            m.reply(m.key_expr, b"OUTSIDER")  # denied by the ACL, were it ever asked
     return count
 with zenoh.open(conf) as s:
     held = [s.declare_queryable(f"mover/rescue/{k}", hear("query"))
@@ -48,6 +52,27 @@ with zenoh.open(conf) as s:
     except KeyboardInterrupt:
         pass
 """
+
+PROBE = r"""
+import json, sys, time, zenoh
+conf = zenoh.Config()
+for key, value in json.load(open(sys.argv[1])).items():
+    conf.insert_json5(key, json.dumps(value))
+got = {}
+with zenoh.open(conf) as s:
+    for _ in range(int(sys.argv[2])):
+        for key in ("rpc/elvis", "hello/elvis"):
+            for r in s.get(f"mover/rescue/{key}", payload=b"probe", timeout=2.0,
+                           target=zenoh.QueryTarget.ALL,
+                           consolidation=zenoh.ConsolidationMode.NONE):
+                if r.ok is not None:
+                    data = bytes(r.ok.payload.to_bytes())
+                    said = "OUTSIDER" if data == b"OUTSIDER" else data[:2].decode("latin-1")
+                    got[f"{key} {said}"] = got.get(f"{key} {said}", 0) + 1
+        time.sleep(0.25)
+print("ANSWERS", json.dumps(got), flush=True)
+"""
+ROUNDS = 20  # of the probe's two queries
 
 
 @pytest.mark.timeout(300)
@@ -66,12 +91,26 @@ async def test_a_leaked_workstation_certificate_serves_no_robot_and_the_run_comp
             log=(tmp_path / "outsider.log").open("ab"), pump=True, label="outsider",
         )  # fmt: skip
         pump = asyncio.ensure_future(outsider.pump(lines.append))
+        async with asyncio.timeout(30):
+            while "OUTSIDER up" not in lines:
+                await asyncio.sleep(0.1)
+        member = tmp_path / "tls" / "member-ernst.json"  # a member asking another
+        probe = await lab.start(
+            "c", [sys.executable, "-c", PROBE, str(member), str(ROUNDS)],
+            log=(tmp_path / "probe.log").open("ab"), pump=True, label="probe",
+        )  # fmt: skip
+        probed: list[str] = []
+        asked = asyncio.ensure_future(probe.pump(probed.append))
         result = await team.run_program(timeout=150)
         lost = losses(result, team)
+        await asyncio.wait_for(asked, 60)
         outsider.signal(signal.SIGINT)
-        await asyncio.wait_for(pump, 10)
+        done, _ = await asyncio.wait([pump], timeout=10)
+        if not done:  # its zenoh session's close once hung past 10 s: what it heard is kept
+            outsider.signal(signal.SIGKILL)
+            await asyncio.wait_for(pump, 10)
     print(result.text)
-    print("\n".join(lines[-2:]))
+    print("\n".join(lines[-2:] + probed[-1:]))
     assert result.code == 0
     assert result.text.count(": done") == 3
     assert lost == {}
@@ -81,3 +120,8 @@ async def test_a_leaked_workstation_certificate_serves_no_robot_and_the_run_comp
     assert tokens >= 4  # connected, and it sees who is there (liveliness is not secret)
     members = ("elvis", "ernst", "moseley", "world")
     assert [k for k in heard if k.endswith(members)] == [], heard
+    answers = [json.loads(x[len("ANSWERS ") :]) for x in probed if x.startswith("ANSWERS ")]
+    assert answers, probed[-3:]
+    got = answers[-1]
+    assert got.get("hello/elvis M2", 0) >= ROUNDS // 2, got  # elvis answered the member
+    assert [k for k in got if k.endswith("OUTSIDER")] == [], got  # the outsider never did
