@@ -113,6 +113,9 @@ async def test_a_team_runs_to_its_end_at_a_2_percent_lossy_50ms_link(tmp_path: P
         lost = losses(result, team)
         chunks_lost = team.proxy.stats.lost
     completed(result, team, lost, end='"team_size": 3')
+    # range-limited broadcasts cross the router's ACL (cells: bcc/, their senders' tokens: bcl/)
+    assert "ernst: heard who=['elvis', 'moseley']" in result.text  # 2 m either side, within 3 m
+    assert "moseley: heard who=['ernst']" in result.text  # elvis is 4 m away
     print(f"loss {loss:.0%}: {chunks_lost} chunks retransmitted; run {result.run_s} s")
 
 
