@@ -154,14 +154,14 @@ def run(args: argparse.Namespace) -> int:
         pts = s.chosen(points(figure))
         if not pts:
             raise UsageError(f"{figure} has no point with these --footbots and --ways")
-        records, fresh, wall = run_points(s, pts, figure)
+        records, made, wall = run_points(s, pts, figure)
         everything.extend(records)
         print(_TABLES[figure](records))
         if figure == "fig2":
             print(_report.fig2_counted(records))
-        print(f"{figure}: {len(fresh)} runs made in {time.monotonic() - t0:.0f} s wall")
-        if fresh:
-            print(_report.speed(fresh, wall))
+        print(f"{figure}: {made.runs} runs made in {time.monotonic() - t0:.0f} s wall")
+        if made.runs:
+            print(_report.speed(made, wall))
         if not args.no_plots:
             from ._plots import plot
 

@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from .._common import plus_minus, summary
+from .._saved import Made
 from ._sweep import DEPLOY_EVERY, FIG3_FOOTBOTS, arena
 
 Records = Sequence[dict[str, Any]]
@@ -247,10 +248,11 @@ def _by_run(rows: Records, footbots: int, eyebots: str) -> dict[int, float | Non
     }
 
 
-def speed(records: Records, wall: float) -> str:
-    """Simulated robot-seconds per wall second of the runs just made."""
-    sim = sum(r["footbots"] * r["duration"] for r in records)
-    cpu = sum(r["wall_s"] for r in records)
+def speed(made: Made, wall: float) -> str:
+    """Simulated robot-seconds per wall second of the runs just made (their sums of
+    ``sim_s``, foot-bots times duration, and ``wall_s``)."""
+    sim = made.sums["sim_s"]
+    cpu = made.sums["wall_s"]
     per_worker = sim / cpu if cpu else math.nan
     overall = f", {sim / wall:.0f} over the pool" if wall else ""
     return f"speed: {per_worker:.0f} simulated foot-bot-seconds per wall second a worker{overall}"

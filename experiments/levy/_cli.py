@@ -181,7 +181,7 @@ def run(args: argparse.Namespace) -> int:
     everything = []
     for sweep in s.sweeps:
         t0 = time.monotonic()
-        records, fresh, wall = run_points(s, points(s, sweep), sweep)
+        records, made, wall = run_points(s, points(s, sweep), sweep)
         everything.extend(records)
         if sweep in CHECKS:
             print(checks_report(sweep, records, s.setup, CHECKS[sweep]))
@@ -193,9 +193,9 @@ def run(args: argparse.Namespace) -> int:
             print(saturation(records, s.setup))
         if sweep == "alpha":
             print(theory(s.setup, ALPHA_TARGETS))
-        print(f"{sweep}: {len(fresh)} runs made in {time.monotonic() - t0:.0f} s wall")
-        if fresh:
-            print(speed(fresh, wall))
+        print(f"{sweep}: {made.runs} runs made in {time.monotonic() - t0:.0f} s wall")
+        if made.runs:
+            print(speed(made, wall))
         if s.out is not None and sweep not in CHECKS:  # tables only beyond the figures
             from ._plots import plot
 

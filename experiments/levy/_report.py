@@ -11,6 +11,7 @@ from typing import Any
 from robots.library import stable_alpha, viswanathan_mu
 
 from .._common import summary
+from .._saved import Made
 from ._paper import ORDER, Setup
 
 Records = list[dict[str, Any]]
@@ -118,10 +119,11 @@ def theory(setup: Setup, targets: int) -> str:
     )
 
 
-def speed(records: Records, wall: float) -> str:
-    """Simulated robot-seconds per wall second of the runs just made."""
-    fresh = sum(r["robot_s"] for r in records)
-    cpu = sum(r["wall_s"] for r in records)
+def speed(made: Made, wall: float) -> str:
+    """Simulated robot-seconds per wall second of the runs just made (their sums of
+    ``robot_s`` and ``wall_s``)."""
+    fresh = made.sums["robot_s"]
+    cpu = made.sums["wall_s"]
     per_core = fresh / cpu if cpu else math.nan
     overall = f", {fresh / wall:.0f} robot-s per wall s over the pool" if wall else ""
     return f"speed: {per_core:.0f} simulated robot-seconds per wall second a worker{overall}"
