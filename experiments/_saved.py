@@ -259,7 +259,11 @@ def _dask(
                 threads_per_worker=1,
                 processes=True,
                 host="127.0.0.1",
-                dashboard_address=None,
+                # the scheduler's HTTP server starts whatever the dashboard setting: None
+                # means port 8787 (on every interface, a warning when taken); a free port
+                # on loopback, with no dashboard, instead
+                dashboard_address="127.0.0.1:0",
+                scheduler_kwargs={"dashboard": False},
             )
             stack.enter_context(cluster)
             client = stack.enter_context(dask.Client(cluster, timeout=CONNECT_S))
