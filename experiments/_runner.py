@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from ._figures import add_figure_arguments
-from ._saved import add_saved_arguments
+from ._saved import Made, add_saved_arguments
 
 Record = dict[str, Any]
 
@@ -37,22 +37,21 @@ def save_dir(args: argparse.Namespace) -> Path | None:
 
 def sweep_made(
     label: str,
-    fresh: list[Record],
+    made: Made,
     t0: float,
     wall: float,
-    speed: Callable[[list[Record], float], str],
+    speed: Callable[[Made, float], str],
 ) -> str:
     """What a runner prints once a sweep (or figure) ``label`` begun at ``t0`` is done: the runs
-    it made and the wall time, and (with runs made) ``speed(fresh, wall)``, their speed."""
-    made = f"{label}: {len(fresh)} runs made in {time.monotonic() - t0:.0f} s wall"
-    return f"{made}\n{speed(fresh, wall)}" if fresh else made
+    it made and the wall time, and (with runs made) ``speed(made, wall)``, their speed."""
+    line = f"{label}: {made.runs} runs made in {time.monotonic() - t0:.0f} s wall"
+    return f"{line}\n{speed(made, wall)}" if made.runs else line
 
 
-def speed(simulated: float, fresh: Sequence[Record], wall: float, unit: str) -> str:
-    """The speed of the runs just made (``fresh``, which took ``wall`` s over the pool and each
-    its ``wall_s``): ``simulated`` seconds of ``unit`` (robot-seconds, say) per wall second of
-    a worker, and over the pool."""
-    cpu = sum(r["wall_s"] for r in fresh)
+def speed(simulated: float, cpu: float, wall: float, unit: str) -> str:
+    """The speed of runs that took ``cpu`` s of their workers and ``wall`` s over the pool:
+    ``simulated`` seconds of ``unit`` (robot-seconds, say) per wall second of a worker, and
+    over the pool."""
     per_worker = simulated / cpu if cpu else math.nan
     overall = f", {simulated / wall:.0f} over the pool" if wall else ""
     return f"speed: {per_worker:.0f} simulated {unit} per wall second a worker{overall}"

@@ -138,6 +138,22 @@ def add_executor_argument(parser: argparse.ArgumentParser) -> None:
     )
 
 
+class Made:
+    """A running aggregate of the runs a sweep made, for its caller's report: how many, and
+    the sum of each ``measures`` value over them (the runs themselves are in the save file).
+    Called with each record (:func:`run_pool`'s ``each``)."""
+
+    def __init__(self, **measures: Callable[[Record], float]) -> None:
+        self.measures = measures
+        self.runs = 0
+        self.sums = dict.fromkeys(measures, 0.0)
+
+    def __call__(self, rec: Record) -> None:
+        self.runs += 1
+        for name, measure in self.measures.items():
+            self.sums[name] += measure(rec)
+
+
 def run_pool(
     jobs: Sequence[Job],
     work: Callable[[Job], Record],
@@ -148,24 +164,30 @@ def run_pool(
     status: Callable[[Record], str],
     on: Executor | None = None,
     describe: Callable[[Job], str] = str,
-) -> list[Record]:
+    each: Callable[[Record], None] | None = None,
+) -> int:
     """Make ``jobs`` with ``work`` on ``workers`` forked processes (one: in this one), or on
     the Dask cluster ``on`` names; append each record to the file ``save_to(record)`` as it
-    comes, this process being the only writer (None: keep nothing). Returns the records made.
-    A job that raises stops the sweep: :class:`JobFailed` names it (``describe``)."""
-    fresh: list[Record] = []
+    comes, this process being the only writer (None: no file), and hand it to ``each`` (a
+    running aggregate such as :class:`Made`, or the caller's list when nothing is saved).
+    Nothing is kept here: the caller builds its tables from the saved files (or what ``each``
+    kept). Returns the number of runs made. A job that raises stops the sweep:
+    :class:`JobFailed` names it (``describe``)."""
+    made = 0
     on = on or Executor()
-    made = _local if on.kind == "local" else _dask
-    for rec in made(jobs, work, workers, on.address, describe):
-        fresh.append(rec)
+    runs = _local if on.kind == "local" else _dask
+    for rec in runs(jobs, work, workers, on.address, describe):
+        made += 1
         if save_to is not None:
             path = save_to(rec)
             path.parent.mkdir(parents=True, exist_ok=True)
             with path.open("a") as f:
                 f.write(json.dumps(rec) + "\n")
-        bar.update(len(fresh), status(rec))
-    bar.close(len(fresh))
-    return fresh
+        if each is not None:
+            each(rec)
+        bar.update(made, status(rec))
+    bar.close(made)
+    return made
 
 
 def _local(
@@ -237,7 +259,11 @@ def _dask(
                 threads_per_worker=1,
                 processes=True,
                 host="127.0.0.1",
-                dashboard_address=None,
+                # the scheduler's HTTP server starts whatever the dashboard setting: None
+                # means port 8787 (on every interface, a warning when taken); a free port
+                # on loopback, with no dashboard, instead
+                dashboard_address="127.0.0.1:0",
+                scheduler_kwargs={"dashboard": False},
             )
             stack.enter_context(cluster)
             client = stack.enter_context(dask.Client(cluster, timeout=CONNECT_S))

@@ -151,12 +151,12 @@ def run(args: argparse.Namespace) -> int:
         pts = s.chosen(points(figure))
         if not pts:
             raise UsageError(f"{figure} has no point with these --footbots and --ways")
-        records, fresh, wall = run_points(s, pts, figure)
+        records, made, wall = run_points(s, pts, figure)
         everything.extend(records)
         print(_TABLES[figure](records))
         if figure == "fig2":
             print(_report.fig2_counted(records))
-        print(sweep_made(figure, fresh, t0, wall, _report.speed))
+        print(sweep_made(figure, made, t0, wall, _report.speed))
         if not args.no_plots:
             from ._plots import plot
 

@@ -15,6 +15,7 @@ import numpy as np
 
 from .. import _runner
 from .._common import plus_minus, summary
+from .._saved import Made
 from ._sweep import DEPLOY_EVERY, FIG3_FOOTBOTS, arena
 
 Records = Sequence[dict[str, Any]]
@@ -248,10 +249,10 @@ def _by_run(rows: Records, footbots: int, eyebots: str) -> dict[int, float | Non
     }
 
 
-def speed(records: Records, wall: float) -> str:
-    """Simulated foot-bot-seconds per wall second of the runs just made."""
-    sim = sum(r["footbots"] * r["duration"] for r in records)
-    return _runner.speed(sim, records, wall, "foot-bot-seconds")
+def speed(made: Made, wall: float) -> str:
+    """Simulated foot-bot-seconds per wall second of the runs just made (``made``: their sums
+    of ``sim_s``, foot-bots times duration, and ``wall_s``)."""
+    return _runner.speed(made.sums["sim_s"], made.sums["wall_s"], wall, "foot-bot-seconds")
 
 
 def _mean(values: Sequence[float | None]) -> float:

@@ -19,7 +19,7 @@ from robots.stigmergic import Motion, Reading
 from sim_hw.continuous import TICK
 
 from .._common import Progress
-from .._saved import Executor, Record, load_runs, run_pool
+from .._saved import Executor, Made, Record, load_runs, run_pool
 from ._arena import Arena, cluttered, corridors
 from ._trial import Settings, run
 
@@ -158,18 +158,30 @@ def _one(job: tuple[EyebotSettings, Point, int]) -> Record:
 
 def run_points(
     s: EyebotSettings, pts: list[Point], label: str = ""
-) -> tuple[list[Record], list[Record], float]:
+) -> tuple[list[Record], Made, float]:
     """Every run of ``pts``: saved ones read back, missing ones made on ``s.workers``
-    processes and saved as they finish. Returns all records, the fresh ones, and the wall
-    seconds spent making them."""
+    processes, saved as they finish and read back with the rest (kept as made when nothing is
+    saved). Returns all records, a tally of the runs made (their simulated foot-bot seconds
+    and wall seconds), and the wall seconds spent making them."""
     save = s.save
-    have = {p: load_runs(None if save is None else save / f"{p.name}.jsonl", s.seed) for p in pts}
-    jobs = [(s, p, k) for p in pts for k in range(s.runs) if k not in have[p]]
+
+    def saved(p: Point) -> dict[int, Record]:
+        return load_runs(None if save is None else save / f"{p.name}.jsonl", s.seed)
+
+    before = {p: set(saved(p)) for p in pts}
+    jobs = [(s, p, k) for p in pts for k in range(s.runs) if k not in before[p]]
     if s.saved_only:
         jobs = []
-    records = [r for p in pts for k, r in sorted(have[p].items()) if k < s.runs]
     t0 = time.monotonic()
-    fresh = run_pool(
+    made = Made(sim_s=lambda r: r["footbots"] * r["duration"], wall_s=lambda r: r["wall_s"])
+    kept: list[Record] = []  # the runs made, when no file keeps them
+
+    def each(rec: Record) -> None:
+        made(rec)
+        if save is None:
+            kept.append(rec)
+
+    run_pool(
         jobs,
         _one,
         workers=s.workers,
@@ -178,6 +190,11 @@ def run_points(
         status=lambda rec: f"{rec['point']} run {rec['run']}",
         on=s.executor,
         describe=lambda job: f"{job[1].name} run {job[2]} (--seed {job[0].seed})",
+        each=each,
     )
-    records.extend(fresh)
-    return records, fresh, time.monotonic() - t0
+    wall = time.monotonic() - t0
+    have = {p: saved(p) for p in pts}
+    made_here = {(p, k) for _, p, k in jobs}
+    records = [r for p in pts for k, r in sorted(have[p].items()) if (p, k) not in made_here]
+    records += [have[p][k] for _, p, k in jobs] if save is not None else kept
+    return [r for r in records if r["run"] < s.runs], made, wall

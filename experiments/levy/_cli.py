@@ -177,7 +177,7 @@ def run(args: argparse.Namespace) -> int:
     everything = []
     for sweep in s.sweeps:
         t0 = time.monotonic()
-        records, fresh, wall = run_points(s, points(s, sweep), sweep)
+        records, made, wall = run_points(s, points(s, sweep), sweep)
         everything.extend(records)
         if sweep in CHECKS:
             print(checks_report(sweep, records, s.setup, CHECKS[sweep]))
@@ -189,7 +189,7 @@ def run(args: argparse.Namespace) -> int:
             print(saturation(records, s.setup))
         if sweep == "alpha":
             print(theory(s.setup, ALPHA_TARGETS))
-        print(sweep_made(sweep, fresh, t0, wall, speed))
+        print(sweep_made(sweep, made, t0, wall, speed))
         if s.out is not None and sweep not in CHECKS:  # tables only beyond the figures
             from ._plots import plot
 

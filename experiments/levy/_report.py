@@ -11,6 +11,7 @@ from robots.library import stable_alpha, viswanathan_mu
 
 from .. import _runner
 from .._common import summary
+from .._saved import Made
 from ._paper import ORDER, Setup
 
 Records = list[dict[str, Any]]
@@ -118,9 +119,10 @@ def theory(setup: Setup, targets: int) -> str:
     )
 
 
-def speed(records: Records, wall: float) -> str:
-    """Simulated robot-seconds per wall second of the runs just made."""
-    return _runner.speed(sum(r["robot_s"] for r in records), records, wall, "robot-seconds")
+def speed(made: Made, wall: float) -> str:
+    """Simulated robot-seconds per wall second of the runs just made (``made``: their sums of
+    ``robot_s`` and ``wall_s``)."""
+    return _runner.speed(made.sums["robot_s"], made.sums["wall_s"], wall, "robot-seconds")
 
 
 def paired(

@@ -14,7 +14,7 @@ from pathlib import Path
 from robots.library import WALKS
 
 from .._common import Progress
-from .._saved import Record, load_runs, run_pool
+from .._saved import Made, Record, load_runs, run_pool
 from ._paper import (
     ALPHA_ROBOTS,
     ALPHA_TARGETS,
@@ -80,17 +80,13 @@ def _one(job: tuple[LevySettings, Point, int]) -> Record:
 
 def run_points(
     s: LevySettings, pts: list[Point], label: str = ""
-) -> tuple[list[Record], list[Record], float]:
+) -> tuple[list[Record], Made, float]:
     """Every run of ``pts`` (saved ones read back, missing ones run on ``s.workers``
-    processes and saved as they finish): all records, the fresh ones, and the wall seconds
-    spent running them."""
-    have = {p: load(s.save, p, s.seed) for p in pts}
-    for p in pts:  # runs saved before records named their step
-        fixed = None if WALKS[p.method][0] else _setup(s, p).fixed
-        for r in have[p].values():
-            r.setdefault("fixed", fixed)
-    jobs = [(s, p, k) for p in pts for k in range(s.runs) if k not in have[p]]
-    records = [r for p in pts for k, r in sorted(have[p].items()) if k < s.runs]
+    processes, saved as they finish and read back with the rest; kept as made when nothing is
+    saved): all records, a tally of the runs made (their robot and wall seconds), and the wall
+    seconds spent making them."""
+    before = {p: set(load(s.save, p, s.seed)) for p in pts}
+    jobs = [(s, p, k) for p in pts for k in range(s.runs) if k not in before[p]]
     t0 = time.monotonic()
     save = s.save
 
@@ -98,7 +94,15 @@ def run_points(
         assert save is not None
         return save / f"{rec['point']}.jsonl"
 
-    fresh = run_pool(
+    made = Made(robot_s=lambda r: r["robot_s"], wall_s=lambda r: r["wall_s"])
+    kept: list[Record] = []  # the runs made, when no file keeps them
+
+    def each(rec: Record) -> None:
+        made(rec)
+        if save is None:
+            kept.append(rec)
+
+    run_pool(
         jobs,
         _one,
         workers=s.workers,
@@ -107,6 +111,15 @@ def run_points(
         status=lambda rec: f"{rec['method']} n={rec['robots']} t={rec['targets']}",
         on=s.executor,
         describe=lambda job: f"{job[1].name} run {job[2]} (--seed {job[0].seed})",
+        each=each,
     )
-    records.extend(fresh)
-    return records, fresh, time.monotonic() - t0
+    wall = time.monotonic() - t0
+    have = {p: load(s.save, p, s.seed) for p in pts}
+    for p in pts:  # runs saved before records named their step
+        fixed = None if WALKS[p.method][0] else _setup(s, p).fixed
+        for r in have[p].values():
+            r.setdefault("fixed", fixed)
+    made_here = {(p, k) for _, p, k in jobs}
+    records = [r for p in pts for k, r in sorted(have[p].items()) if (p, k) not in made_here]
+    records += [have[p][k] for _, p, k in jobs] if save is not None else kept
+    return [r for r in records if r["run"] < s.runs], made, wall

@@ -229,20 +229,14 @@ def describe(job: Job) -> str:
 
 def trials(settings: MazeSettings) -> list[dict[str, Any]]:
     """The requested grid of trials, one record per run in grid order: the runs saved under
-    ``settings.save`` with its seed read back, the missing ones made on its executor and
-    saved as they finish."""
+    ``settings.save`` with its seed, the missing ones made on its executor and saved as they
+    finish, then read back from the files with the rest (kept as made when nothing is saved)."""
     s = settings
     todo = jobs(s)
-    have: dict[tuple[str, int, float | None], dict[int, Record]] = {}
-    if s.save is not None:
-        for _, p, _, n, m in todo:
-            if (m, n, _p(p)) not in have:
-                have[m, n, _p(p)] = load_runs(point_file(s, m, n, _p(p)), s.seed)
-    records = [
-        r for per in have.values() for r in per.values() if r["run"] < s.runs_for(r["method"])
-    ]
+    have = _saved(s, todo)
     missing = [j for j in todo if j[2] not in have.get((j[4], j[3], _p(j[1])), {})]
-    records += run_pool(
+    kept: list[Record] = []  # the runs made, when no file keeps them
+    run_pool(
         missing,
         one_run,
         workers=s.workers,
@@ -253,10 +247,30 @@ def trials(settings: MazeSettings) -> list[dict[str, Any]]:
         status=lambda r: f"{r['method']} n={r['agents']} p={r['p']} run {r['run']}",
         on=s.executor,
         describe=describe,
+        each=kept.append if s.save is None else None,
     )
+    if missing and s.save is not None:
+        have = _saved(s, todo)
+    records = [
+        r for per in have.values() for r in per.values() if r["run"] < s.runs_for(r["method"])
+    ]
+    records += kept
     order = {(m, n, _p(p), run): i for i, (_, p, run, n, m) in enumerate(todo)}
     records.sort(key=lambda r: order[r["method"], r["agents"], r["p"], r["run"]])
     return records
+
+
+def _saved(
+    s: MazeSettings, todo: list[Job]
+) -> dict[tuple[str, int, float | None], dict[int, Record]]:
+    """The runs saved under ``s.save`` with ``s.seed`` for the points of ``todo``, by point
+    (method, agent count, obstacle probability) and run index."""
+    have: dict[tuple[str, int, float | None], dict[int, Record]] = {}
+    if s.save is not None:
+        for _, p, _, n, m in todo:
+            if (m, n, _p(p)) not in have:
+                have[m, n, _p(p)] = load_runs(point_file(s, m, n, _p(p)), s.seed)
+    return have
 
 
 def _p(p: float) -> float | None:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -36,6 +37,11 @@ async def test_search_and_rescue_with_three_robot_processes_moves_the_box(tmp_pa
     code, out = await run_demo(tmp_path)
     assert code == 0, out
     assert out.count(": done") == 3, out
+    step = r"step (\d+) \((\w+)\): (\d+) messages for \d+ members \(bound (\d+)\)"
+    steps = re.findall(step, out)
+    assert steps, out
+    over = [f"step {n} ({kind}): {m} > {b}" for n, kind, m, b in steps if int(m) > int(b)]
+    assert not over, (over, out)  # each step within its message bound (issue 28: 14 > 12)
     moved = [line for line in out.splitlines() if line.startswith("box 'victim' moved")]
     assert moved, out
     nearer = float(moved[0].split("; ")[1].split(" m nearer")[0])

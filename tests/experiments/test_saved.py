@@ -34,8 +34,10 @@ SCRIPT = textwrap.dedent(
     for pool in range(3):
         out = Path(sys.argv[1]) / f"{pool}.jsonl"
         jobs = [json.dumps({"seed": 7, "run": i}) for i in range(5)]
-        made = run_pool(jobs, work, workers=2, save_to=lambda rec: out,
-                        bar=Progress(5, enabled=False), status=str)
+        made = []
+        n = run_pool(jobs, work, workers=2, save_to=lambda rec: out,
+                     bar=Progress(5, enabled=False), status=str, each=made.append)
+        assert n == len(made)
         print(sorted(r["run"] for r in made), sorted(load_runs(out, 7)))
     """
 )

@@ -169,11 +169,18 @@ def _recording(path: Path, n: int = 30) -> None:
     path.write_text("\n".join(lines) + "\n")
 
 
-def test_a_replay_saved_as_rrd_reads_back(tmp_path: Path) -> None:
+@pytest.mark.parametrize("suffix", [".jsonl", ".mcap"])
+def test_a_replay_saved_as_rrd_reads_back(tmp_path: Path, suffix: str) -> None:
+    """A JSON-lines recording, and the same exported as MCAP (``mover replay run.jsonl --out
+    run.mcap``), replayed to a ``.rrd``: the same entities, ticks and poses."""
     from rerun.chunk import RrdReader
 
     rec, rrd = tmp_path / "run.jsonl", tmp_path / "run.rrd"
     _recording(rec)
+    if suffix == ".mcap":
+        pytest.importorskip("mcap_ros2", reason="the mcap extra is not installed")
+        rec, jsonl = tmp_path / "run.mcap", rec
+        assert main(["replay", str(jsonl), "--out", str(rec)]) == 0
     assert main(["replay", str(rec), "--out", str(rrd)]) == 0
     reader = RrdReader(rrd)
     (store,) = reader.recordings()
