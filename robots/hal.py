@@ -18,9 +18,11 @@ Conventions:
 
 from __future__ import annotations
 
+import asyncio
+from collections.abc import Awaitable
 from contextlib import AbstractAsyncContextManager
 from dataclasses import dataclass
-from typing import Literal, Protocol, runtime_checkable
+from typing import Literal, Protocol, TypeVar, runtime_checkable
 
 from mover import ExpectedFault, IdleClock
 
@@ -37,6 +39,7 @@ __all__ = [
     "Hardware",
     "HardwareLost",
     "Led",
+    "LostLatch",
     "Odometry",
     "PushResult",
     "PushSense",
@@ -45,6 +48,8 @@ __all__ = [
     "Sonar",
     "sleep_in_ticks",
 ]
+
+T = TypeVar("T")
 
 Pose = tuple[float, float, float]
 """(x, y, heading) in metres and radians."""
@@ -92,6 +97,44 @@ class HardwareLost(ExpectedFault):
     connects again, and a program that was running fails with it (an expected fault: reported
     in one line, not as a bug).
     """
+
+
+class LostLatch:
+    """The part of a ticking clock that keeps the hardware's loss and wakes its waits (a base
+    of the Thymio's clock and of the simulated robot's ticks).
+
+    :meth:`lose` keeps the first :class:`HardwareLost` and wakes every wait; from then on
+    :meth:`_check` raises it. :meth:`_guard` awaits a call of the hardware's and loses on its
+    HardwareLost (raised again). :meth:`_pulse` wakes every :meth:`_wait_change`.
+    """
+
+    def __init__(self) -> None:
+        self._lost: HardwareLost | None = None
+        self._changed = asyncio.Event()
+
+    def lose(self, exc: HardwareLost) -> None:
+        """The hardware went away: every wait raises ``exc`` from now on."""
+        if self._lost is None:
+            self._lost = exc
+        self._pulse()
+
+    async def _guard(self, call: Awaitable[T]) -> T:
+        try:
+            return await call
+        except HardwareLost as exc:
+            self.lose(exc)
+            raise
+
+    def _check(self) -> None:
+        if self._lost is not None:
+            raise self._lost
+
+    def _pulse(self) -> None:
+        self._changed.set()
+        self._changed = asyncio.Event()
+
+    async def _wait_change(self) -> None:
+        await self._changed.wait()
 
 
 @dataclass(frozen=True, slots=True)

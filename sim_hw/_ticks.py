@@ -9,16 +9,16 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import math
-from collections.abc import AsyncIterator, Awaitable, Callable
+from collections.abc import AsyncIterator, Callable
 
 from mover._futures import failure
-from robots.hal import HardwareLost
+from robots.hal import HardwareLost, LostLatch
 
 from ._link import WorldLink
 from ._types import Command, Readings
 
 
-class Ticks:
+class Ticks(LostLatch):
     """A robot's clock over a :class:`WorldLink`: its readings, one exchange at a time, idling.
 
     * ``tick(make)`` hands in ``make()`` (the command, built when the exchange starts) for the
@@ -58,6 +58,7 @@ class Ticks:
         period: float,
         after: Callable[[Command, Readings], None] | None = None,
     ) -> None:
+        super().__init__()
         self.robot = robot
         self.readings = readings
         self._link = link
@@ -69,8 +70,6 @@ class Ticks:
         self._idle = False
         self._handed = -math.inf  # time of the readings the last command was handed in on
         self._hold: float | None = None  # no command on readings later than this (hold)
-        self._lost: HardwareLost | None = None
-        self._changed = asyncio.Event()
 
     @property
     def idle(self) -> bool:
@@ -150,16 +149,11 @@ class Ticks:
     async def _exchange(
         self, number: int, make: Callable[[], Command]
     ) -> tuple[int, Command, Readings]:
-        if self._lost is not None:
-            raise self._lost
+        self._check()
         command = make()
         self._handed = self.now()
         self._pulse()
-        try:
-            readings = await self._link.exchange(self._tick_of(self.readings), command)
-        except HardwareLost as exc:
-            self._lose(exc)
-            raise
+        readings = await self._guard(self._link.exchange(self._tick_of(self.readings), command))
         return number, command, readings
 
     def hold(self, t: float | None) -> None:
@@ -182,8 +176,7 @@ class Ticks:
         """Return once a command was handed in with readings of time ``t`` or later: this
         robot went on past ``t`` (a robot whose program stopped at ``t`` hands in nothing)."""
         while not self._handed >= t:
-            if self._lost is not None:
-                raise self._lost
+            self._check()
             await self._wait_change()
 
     @contextlib.asynccontextmanager
@@ -192,8 +185,7 @@ class Ticks:
         if self._idle:
             raise RuntimeError(f"robot {self.robot!r} is already idle")
         await self._finish()  # the exchange under way ends first
-        if self._lost is not None:
-            raise self._lost
+        self._check()
         self._idle = True  # (no await since _finish: no exchange can start in between)
         self._pulse()
         try:
@@ -224,22 +216,3 @@ class Ticks:
 
         with contextlib.suppress(HardwareLost):  # _guard noted it: passed() raises it
             await self._guard(self._link.watch(seen))
-
-    async def _guard(self, call: Awaitable[Readings | None]) -> Readings:
-        try:
-            return await call
-        except HardwareLost as exc:
-            self._lose(exc)
-            raise
-
-    def _lose(self, exc: HardwareLost) -> None:
-        if self._lost is None:
-            self._lost = exc
-        self._pulse()
-
-    def _pulse(self) -> None:
-        self._changed.set()
-        self._changed = asyncio.Event()
-
-    async def _wait_change(self) -> None:
-        await self._changed.wait()

@@ -8,39 +8,26 @@ The step is decided once every live member's result is in (``and_done``; all-to-
 
 from __future__ import annotations
 
-import asyncio
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
+from ._served import ServedSteps
 from ._step import Decision, Step
-
-if TYPE_CHECKING:
-    from ._designated import Collectives
 
 AND_DONE = "mover.and_done"
 AND_JOIN = "mover.and_join"
 AND_PUT = "mover.and_put"
 
 
-class AndSteps:
+class AndSteps(ServedSteps):
     """The AND steps ``collectives`` serves (a part of it)."""
 
-    def __init__(self, collectives: Collectives) -> None:
-        self._c = collectives
+    kind = "and"
 
     async def done(self, run: str, step: int, member: str, members: list[str], result: Any) -> Any:
         """A member finished: record its result; answer when every live member has."""
         state = self._c.serve(run, step, members)
         state.results[member] = result
-        self.settle(state)
-        return (await asyncio.shield(state.decision)).to_wire()
-
-    async def join(self, run: str, step: int, member: str, members: list[str]) -> Any:
-        """A member still in its operation saw a member of the step lost: the decision, once
-        taken (it fails the step unless the policy is ``survivors``)."""
-        state = self._c.serve(run, step, members)
-        state.joined.add(member)
-        self.settle(state)
-        return (await asyncio.shield(state.decision)).to_wire()
+        return await self._answer(state)
 
     def put(self, run: str, step: int, member: str, members: list[str], result: Any) -> None:
         """All-to-all: a member's result, sent to every other member."""
@@ -51,11 +38,7 @@ class AndSteps:
     def settle(self, state: Step) -> None:
         """Decide served AND step ``state`` if it can be, now."""
         c = self._c
-        if state.decision.done() or not c.questions.heard_all(state):
-            return  # (as for an OR: a successor first hears every live member)
-        lost = c._lost_in(state)
-        if lost:
-            c._decide(state, Decision("lost", lost=lost))
+        if state.decision.done() or not self._may_decide(state):
             return
         expected = c._expected(state) | state.results.keys() & state.members
         if c._fails(state) and not state.members <= expected:

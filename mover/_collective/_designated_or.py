@@ -8,17 +8,14 @@ in their answer). Protocol and costs: ``docs/collectives.md``.
 
 from __future__ import annotations
 
-import asyncio
 import logging
 import math
 from functools import partial
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from .._exceptions import Answered
+from ._served import ServedSteps
 from ._step import DECIDED_TOPIC, Decision, Step
-
-if TYPE_CHECKING:
-    from ._designated import Collectives
 
 log = logging.getLogger("mover.tasks")
 
@@ -27,18 +24,10 @@ OR_CLAIM = "mover.or_claim"
 OR_PASSED = "mover.or_passed"
 
 
-class OrSteps:
+class OrSteps(ServedSteps):
     """The OR steps ``collectives`` serves as their designated member (a part of it)."""
 
-    def __init__(self, collectives: Collectives) -> None:
-        self._c = collectives
-
-    async def join(self, run: str, step: int, member: str, members: list[str]) -> Any:
-        """A member waits for the decision."""
-        state = self._c.serve(run, step, members, "or")
-        state.joined.add(member)
-        self.settle(state)
-        return (await asyncio.shield(state.decision)).to_wire()
+    kind = "or"
 
     async def claim(
         self,
@@ -58,8 +47,7 @@ class OrSteps:
             await self._c._owned(state)  # the questions it may ask belong to the step
         if all(m != member for m, _, _ in state.claims):
             state.claims.append((member, result, finished_at))
-        self.settle(state)
-        return (await asyncio.shield(state.decision)).to_wire()
+        return await self._answer(state)
 
     def tell(self, state: Step) -> None:
         """A served OR step is decided: stop asking, and tell the members the decision, in one
@@ -83,11 +71,7 @@ class OrSteps:
             # will never ask.
             self.tell(state)
             return
-        if not c.questions.heard_all(state):
-            return  # a successor decides only once every live member has said what it knows
-        lost = c._lost_in(state)
-        if lost:
-            c._decide(state, Decision("lost", lost=lost))
+        if not self._may_decide(state):
             return
         if not state.claims:
             return

@@ -23,14 +23,14 @@ import time
 from collections.abc import AsyncIterator, Awaitable, Callable
 
 from mover._futures import failure
-from robots.hal import HardwareLost, sleep_in_ticks
+from robots.hal import HardwareLost, LostLatch, sleep_in_ticks
 
 from ._devices import Readings
 
 __all__ = ["ThymioClock"]
 
 
-class ThymioClock:
+class ThymioClock(LostLatch):
     """``robots.hal.Clock`` over a Thymio (see the module docstring).
 
     ``exchange()`` is the hardware's: send the commands that changed, read the sensors, return
@@ -46,6 +46,7 @@ class ThymioClock:
         took: Callable[[Readings], None],
         stop: Callable[[], None],
     ) -> None:
+        super().__init__()
         self.tick_period = tick_period
         self.readings = readings
         self._exchange = exchange
@@ -56,8 +57,6 @@ class ThymioClock:
         self._handed = -math.inf
         self._hold: float | None = None
         self._idle = False
-        self._lost: HardwareLost | None = None
-        self._changed = asyncio.Event()
 
     def now(self) -> float:
         """The wall-clock time of the current readings, in seconds."""
@@ -149,27 +148,3 @@ class ThymioClock:
             while True:
                 self._take(await self._guard(self._exchange()))
                 await asyncio.sleep(self.tick_period)
-
-    async def _guard(self, exchange: Awaitable[Readings]) -> Readings:
-        try:
-            return await exchange
-        except HardwareLost as exc:
-            self.lose(exc)
-            raise
-
-    def lose(self, exc: HardwareLost) -> None:
-        """The robot went away: every wait raises ``exc`` from now on."""
-        if self._lost is None:
-            self._lost = exc
-        self._pulse()
-
-    def _check(self) -> None:
-        if self._lost is not None:
-            raise self._lost
-
-    def _pulse(self) -> None:
-        self._changed.set()
-        self._changed = asyncio.Event()
-
-    async def _wait_change(self) -> None:
-        await self._changed.wait()
