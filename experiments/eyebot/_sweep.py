@@ -9,7 +9,6 @@ the master seed and k), so that the ways of working are compared on the same sta
 from __future__ import annotations
 
 import functools
-import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -18,8 +17,8 @@ import numpy as np
 from robots.stigmergic import Motion, Reading
 from sim_hw.continuous import TICK
 
-from .._common import Progress
-from .._saved import Executor, Made, Record, load_runs, run_pool
+from .. import _runner
+from .._saved import Executor, Made, Record
 from ._arena import Arena, cluttered, corridors
 from ._trial import Settings, run
 
@@ -159,42 +158,17 @@ def _one(job: tuple[EyebotSettings, Point, int]) -> Record:
 def run_points(
     s: EyebotSettings, pts: list[Point], label: str = ""
 ) -> tuple[list[Record], Made, float]:
-    """Every run of ``pts``: saved ones read back, missing ones made on ``s.workers``
-    processes, saved as they finish and read back with the rest (kept as made when nothing is
-    saved). Returns all records, a tally of the runs made (their simulated foot-bot seconds
+    """Every run of ``pts`` (:func:`experiments._runner.run_points`; none made with
+    ``saved_only``): all records, a tally of the runs made (their simulated foot-bot seconds
     and wall seconds), and the wall seconds spent making them."""
-    save = s.save
-
-    def saved(p: Point) -> dict[int, Record]:
-        return load_runs(None if save is None else save / f"{p.name}.jsonl", s.seed)
-
-    before = {p: set(saved(p)) for p in pts}
-    jobs = [(s, p, k) for p in pts for k in range(s.runs) if k not in before[p]]
-    if s.saved_only:
-        jobs = []
-    t0 = time.monotonic()
     made = Made(sim_s=lambda r: r["footbots"] * r["duration"], wall_s=lambda r: r["wall_s"])
-    kept: list[Record] = []  # the runs made, when no file keeps them
-
-    def each(rec: Record) -> None:
-        made(rec)
-        if save is None:
-            kept.append(rec)
-
-    run_pool(
-        jobs,
+    records, wall = _runner.run_points(
+        s,
+        pts,
         _one,
-        workers=s.workers,
-        save_to=None if save is None else (lambda rec: save / f"{rec['point']}.jsonl"),
-        bar=Progress(len(jobs), label, enabled=s.progress and bool(jobs)),
+        made,
+        label=label,
         status=lambda rec: f"{rec['point']} run {rec['run']}",
-        on=s.executor,
-        describe=lambda job: f"{job[1].name} run {job[2]} (--seed {job[0].seed})",
-        each=each,
+        make=not s.saved_only,
     )
-    wall = time.monotonic() - t0
-    have = {p: saved(p) for p in pts}
-    made_here = {(p, k) for _, p, k in jobs}
-    records = [r for p in pts for k, r in sorted(have[p].items()) if (p, k) not in made_here]
-    records += [have[p][k] for _, p, k in jobs] if save is not None else kept
-    return [r for r in records if r["run"] < s.runs], made, wall
+    return records, made, wall

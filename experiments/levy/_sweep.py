@@ -7,14 +7,12 @@ so that more trials can be added to a point (``--runs 100`` after ``--runs 50``)
 
 from __future__ import annotations
 
-import time
 from dataclasses import replace
-from pathlib import Path
 
 from robots.library import WALKS
 
-from .._common import Progress
-from .._saved import Made, Record, load_runs, run_pool
+from .. import _runner
+from .._saved import Made, Record
 from ._paper import (
     ALPHA_ROBOTS,
     ALPHA_TARGETS,
@@ -60,11 +58,6 @@ def points(s: LevySettings, sweep: str) -> list[Point]:
     raise ValueError(f"unknown sweep {sweep!r}")
 
 
-def load(save: Path | None, point: Point, seed: int) -> dict[int, Record]:
-    """The saved runs of ``point`` under master ``seed``, by run index."""
-    return load_runs(None if save is None else save / f"{point.name}.jsonl", seed)
-
-
 def _setup(s: LevySettings, p: Point) -> Setup:
     setup = replace(s.setup, alpha=p.alpha)
     return setup if p.fixed is None else replace(setup, fixed=p.fixed)
@@ -81,45 +74,22 @@ def _one(job: tuple[LevySettings, Point, int]) -> Record:
 def run_points(
     s: LevySettings, pts: list[Point], label: str = ""
 ) -> tuple[list[Record], Made, float]:
-    """Every run of ``pts`` (saved ones read back, missing ones run on ``s.workers``
-    processes, saved as they finish and read back with the rest; kept as made when nothing is
-    saved): all records, a tally of the runs made (their robot and wall seconds), and the wall
-    seconds spent making them."""
-    before = {p: set(load(s.save, p, s.seed)) for p in pts}
-    jobs = [(s, p, k) for p in pts for k in range(s.runs) if k not in before[p]]
-    t0 = time.monotonic()
-    save = s.save
+    """Every run of ``pts`` (:func:`experiments._runner.run_points`): all records, a tally of
+    the runs made (their robot and wall seconds), and the wall seconds spent making them."""
 
-    def save_to(rec: Record) -> Path:
-        assert save is not None
-        return save / f"{rec['point']}.jsonl"
+    def mend(p: Point, runs: dict[int, Record]) -> None:  # runs saved before records named
+        fixed = None if WALKS[p.method][0] else _setup(s, p).fixed  # their step
+        for r in runs.values():
+            r.setdefault("fixed", fixed)
 
     made = Made(robot_s=lambda r: r["robot_s"], wall_s=lambda r: r["wall_s"])
-    kept: list[Record] = []  # the runs made, when no file keeps them
-
-    def each(rec: Record) -> None:
-        made(rec)
-        if save is None:
-            kept.append(rec)
-
-    run_pool(
-        jobs,
+    records, wall = _runner.run_points(
+        s,
+        pts,
         _one,
-        workers=s.workers,
-        save_to=None if save is None else save_to,
-        bar=Progress(len(jobs), label, enabled=s.progress and bool(jobs)),
+        made,
+        label=label,
         status=lambda rec: f"{rec['method']} n={rec['robots']} t={rec['targets']}",
-        on=s.executor,
-        describe=lambda job: f"{job[1].name} run {job[2]} (--seed {job[0].seed})",
-        each=each,
+        mend=mend,
     )
-    wall = time.monotonic() - t0
-    have = {p: load(s.save, p, s.seed) for p in pts}
-    for p in pts:  # runs saved before records named their step
-        fixed = None if WALKS[p.method][0] else _setup(s, p).fixed
-        for r in have[p].values():
-            r.setdefault("fixed", fixed)
-    made_here = {(p, k) for _, p, k in jobs}
-    records = [r for p in pts for k, r in sorted(have[p].items()) if (p, k) not in made_here]
-    records += [have[p][k] for _, p, k in jobs] if save is not None else kept
-    return [r for r in records if r["run"] < s.runs], made, wall
+    return records, made, wall

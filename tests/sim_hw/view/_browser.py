@@ -7,6 +7,7 @@ one satisfies a test, or a deadline passes. SwiftShader renders the WebGL/WebGPU
 
 from __future__ import annotations
 
+import asyncio
 import base64
 import contextlib
 import io
@@ -20,6 +21,7 @@ from pathlib import Path
 from typing import Any
 
 BROWSERS = ("chromium", "chromium-browser", "google-chrome")
+ENOUGH = 100  # pixels of a robot's colour: a disc of ~12 px radius has ~450
 
 
 def find_browser() -> str | None:
@@ -176,3 +178,44 @@ def distinct_pixels(image: Any) -> int:
     colours, counts = np.unique(px, axis=0, return_counts=True)
     background = colours[counts.argmax()]
     return int((px != background).any(axis=1).sum())
+
+
+async def replay_in_browser(
+    cluster: Any, browser: str, recording: Path, png: Path, done: Callable[[Any], bool]
+) -> tuple[Any, Any]:
+    """``mover replay RECORDING`` started in ``cluster`` (a :func:`mover.testing.cluster`) and
+    its page screenshotted into ``png`` until ``done(image)``: the replay's process and the
+    last image."""
+    from mover._config import free_port
+
+    from .test_view_cli import expect_line
+
+    port = free_port()
+    replay = await cluster.start(
+        "mover._cli", "replay", str(recording), "--port", str(port), ready=None
+    )
+    url = (await expect_line(replay, "mover replay: open", 60)).split()[-1]
+    image = await asyncio.to_thread(
+        screenshots, browser, url, png, done, profile=png.with_name(png.stem + "-chromium")
+    )
+    return replay, image
+
+
+def browser_or_skip() -> str:
+    """The browser to drive; the test skipped, saying why, without one."""
+    import pytest
+
+    browser = find_browser()
+    if browser is None:
+        pytest.skip("no Chromium on PATH (Debian: apt-get install chromium)")
+    return browser
+
+
+def shown(image: Any, colours: dict[str, tuple[int, int, int]]) -> dict[str, int]:
+    """Pixels of each robot's colour in ``image`` (a robot is shown from :data:`ENOUGH`)."""
+    return {name: count_near(image, rgb) for name, rgb in colours.items()}
+
+
+def all_shown(colours: dict[str, tuple[int, int, int]]) -> Callable[[Any], bool]:
+    """A screenshot's test: every robot of ``colours`` is shown."""
+    return lambda image: min(shown(image, colours).values()) >= ENOUGH

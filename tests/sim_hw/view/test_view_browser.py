@@ -23,7 +23,15 @@ from mover.testing import cluster
 from sim_hw.continuous._record import track_colours
 from sim_hw.view._entities import rgb
 
-from ._browser import count_near, distinct_pixels, find_browser, screenshots
+from ._browser import (
+    ENOUGH,
+    all_shown,
+    browser_or_skip,
+    distinct_pixels,
+    replay_in_browser,
+    screenshots,
+    shown,
+)
 from .test_view_cli import expect_line
 
 pytestmark = pytest.mark.processes
@@ -31,20 +39,14 @@ pytestmark = pytest.mark.processes
 ROOT = Path(__file__).resolve().parents[3]
 WORLD = str(ROOT / "worlds" / "search_and_rescue.toml")
 NAMES = ["ernst", "moseley"]
-COLOURS = track_colours(["elvis", "ernst", "moseley"])  # the world file's robots, sorted
-ENOUGH = 100  # pixels of a robot's colour: a disc of ~12 px radius has ~450
-
-
-def _world_on_page(image: object) -> bool:
-    return all(count_near(image, rgb(COLOURS[n])) >= ENOUGH for n in NAMES)
+_ALL = track_colours(["elvis", "ernst", "moseley"])  # the world file's robots, sorted
+COLOURS = {n: rgb(_ALL[n]) for n in NAMES}
 
 
 @pytest.mark.slow
 @pytest.mark.timeout(300)
 async def test_the_world_reaches_the_browser_live_and_replayed(tmp_path: Path) -> None:
-    browser = find_browser()
-    if browser is None:
-        pytest.skip("no Chromium on PATH (Debian: apt-get install chromium)")
+    browser = browser_or_skip()
     rec = tmp_path / "run.jsonl"
     async with cluster(cwd=ROOT) as c, c.launcher() as node:
         await c.world(WORLD, "--record", str(rec), "--state-rate", "5", expect=len(NAMES))
@@ -62,7 +64,7 @@ async def test_the_world_reaches_the_browser_live_and_replayed(tmp_path: Path) -
                 browser,
                 url,
                 tmp_path / "live.png",
-                _world_on_page,
+                all_shown(COLOURS),
                 profile=tmp_path / "chromium-live",
             )
             assert not run.done() or "result" in str(run.result()), "the program ran"
@@ -70,24 +72,16 @@ async def test_the_world_reaches_the_browser_live_and_replayed(tmp_path: Path) -
             run.cancel()
             with contextlib.suppress(BaseException):
                 await run
-        counts = {n: count_near(live, rgb(COLOURS[n])) for n in NAMES}
+        counts = shown(live, COLOURS)
         assert distinct_pixels(live) > 20_000, "the page is not blank"
         assert all(v >= ENOUGH for v in counts.values()), (counts, tmp_path / "live.png")
         view.send_signal(signal.SIGINT)
         assert await asyncio.wait_for(view.wait(), 30) == 0
     async with cluster(cwd=ROOT) as c:
-        port = free_port()
-        replay = await c.start("mover._cli", "replay", str(rec), "--port", str(port), ready=None)
-        url = (await expect_line(replay, "mover replay: open", 60)).split()[-1]
-        played = await asyncio.to_thread(
-            screenshots,
-            browser,
-            url,
-            tmp_path / "replay.png",
-            _world_on_page,
-            profile=tmp_path / "chromium-replay",
+        replay, played = await replay_in_browser(
+            c, browser, rec, tmp_path / "replay.png", all_shown(COLOURS)
         )
-        counts = {n: count_near(played, rgb(COLOURS[n])) for n in NAMES}
+        counts = shown(played, COLOURS)
         assert all(v >= ENOUGH for v in counts.values()), (counts, tmp_path / "replay.png")
         replay.send_signal(signal.SIGINT)
         assert await asyncio.wait_for(replay.wait(), 30) == 0
