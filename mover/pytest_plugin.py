@@ -57,7 +57,7 @@ from ._node import Node
 from ._procs import Child
 from ._procs import start as start_process
 from ._procs import stop as stop_processes
-from .testing import Cluster, cluster
+from .testing import Cluster, cluster, first_line
 
 READY_TIMEOUT = 60.0
 """Seconds a process may take to become a member."""
@@ -122,7 +122,9 @@ async def mover_world(mover_cluster: Cluster, mover_launcher: Node) -> Starter:
 
 @pytest_asyncio.fixture
 async def mover_robots(mover_cluster: Cluster, mover_launcher: Node) -> Starter:
-    """``await mover_robots(*names, hardware="sim")``: robot processes (``python -m robots``)."""
+    """``await mover_robots(*names, hardware="sim")``: robot processes (``python -m robots``),
+    returned once each is up with its hardware and its ``robot.*`` procedures exported. A
+    lock-step world starts when all the robots it expects are in: start them in one call."""
 
     async def start(*names: str, hardware: str = "sim") -> list[asyncio.subprocess.Process]:
         procs = [
@@ -131,7 +133,7 @@ async def mover_robots(mover_cluster: Cluster, mover_launcher: Node) -> Starter:
             )
             for n in names
         ]
-        await _ready(mover_cluster, mover_launcher, list(names))
+        await _ready(mover_cluster, mover_launcher, list(names), said_ready=procs)
         return procs
 
     return start
@@ -217,9 +219,26 @@ async def mover_up(request: pytest.FixtureRequest, tmp_path: Path) -> AsyncItera
             await stop_processes([child], [(signal.SIGINT, 20.0), (signal.SIGKILL, 20.0)])
 
 
-async def _ready(c: Cluster, node: Node, names: Sequence[str]) -> None:
-    """Wait until ``names`` are members; fail at once if one of the processes exits first."""
-    waiting = asyncio.ensure_future(node.membership.wait_for(list(names), timeout=READY_TIMEOUT))
+async def _ready(
+    c: Cluster,
+    node: Node,
+    names: Sequence[str],
+    said_ready: Sequence[asyncio.subprocess.Process] = (),
+) -> None:
+    """Wait until ``names`` are members, and each of ``said_ready`` printed READY (a robot
+    process does once its hardware is up and its procedures are exported: a test's first
+    ``robot.*`` call finds them); fail at once if one of the processes exits first."""
+
+    async def up() -> None:
+        async with asyncio.timeout(READY_TIMEOUT):
+            await node.membership.wait_for(list(names), timeout=READY_TIMEOUT)
+            ready = (
+                first_line(p, lambda line: line.startswith("READY"), READY_TIMEOUT)
+                for p in said_ready
+            )
+            await asyncio.gather(*ready)
+
+    waiting = asyncio.ensure_future(up())
     died = asyncio.ensure_future(c.first_exit())
     try:
         done, _ = await asyncio.wait({waiting, died}, return_when=asyncio.FIRST_COMPLETED)
@@ -234,8 +253,9 @@ async def _ready(c: Cluster, node: Node, names: Sequence[str]) -> None:
         pytest.fail(why, pytrace=False)
     if waiting in done and failure(waiting) is not None:
         missing = [n for n in names if n not in node.membership]
+        what = "become members" if missing else "say READY (their hardware up)"
         pytest.fail(
-            f"{', '.join(missing)} did not become members within {READY_TIMEOUT:g} s",
+            f"{', '.join(missing or names)} did not {what} within {READY_TIMEOUT:g} s",
             pytrace=False,
         )
 

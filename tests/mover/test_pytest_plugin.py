@@ -29,6 +29,9 @@ async def test_hello(mover_world, mover_robots, mover_launcher):
     t0 = time.monotonic()
     await mover_world("worlds/search_and_rescue.toml", expect=3)
     await mover_robots(*ROBOTS)
+    for name in ROBOTS:  # their procedures are exported once mover_robots returns
+        pose = await mover_launcher.call(name, "robot.pose", timeout=5)
+        assert len(pose) == 3, pose
     outcomes = await launch(mover_launcher, "hello_team", ROBOTS, {}, run="t1")
     assert all("result" in o for o in outcomes.values()), outcomes
     print(f"TOOK {time.monotonic() - t0:.1f} s")
