@@ -55,5 +55,6 @@ async def test_devices_can_be_left_out() -> None:
 
 
 def test_a_robot_s_backend_loads_no_world() -> None:
-    """A robot process joins a world process: its backend needs neither pymunk nor the world."""
-    assert loaded_roots("sim_hw.continuous._backend", ("pymunk", "matplotlib")) == "[]"
+    """A robot process joins a world process: its backend needs neither pymunk nor the world,
+    nor numpy (the stigmergic kinds' backends, which do, are a module of their own)."""
+    assert loaded_roots("sim_hw.continuous._backend", ("pymunk", "matplotlib", "numpy")) == "[]"
