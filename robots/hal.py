@@ -110,7 +110,7 @@ class LostLatch:
 
     def __init__(self) -> None:
         self._lost: HardwareLost | None = None
-        self._changed = asyncio.Event()
+        self._changed: asyncio.Event | None = None  # made when someone waits for a change
 
     def lose(self, exc: HardwareLost) -> None:
         """The hardware went away: every wait raises ``exc`` from now on."""
@@ -130,10 +130,13 @@ class LostLatch:
             raise self._lost
 
     def _pulse(self) -> None:
-        self._changed.set()
-        self._changed = asyncio.Event()
+        if self._changed is not None:  # (none made: no one waits)
+            self._changed.set()
+            self._changed = None
 
     async def _wait_change(self) -> None:
+        if self._changed is None:
+            self._changed = asyncio.Event()
         await self._changed.wait()
 
 

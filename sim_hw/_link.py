@@ -91,7 +91,7 @@ class _DoorLink:
         self.lead = door.control_delay
 
     async def exchange(self, tick: int, command: Command) -> Readings:
-        readings: Readings = await self.door.step(self.robot, tick, command)
+        readings: Readings = await self.door.step(self.robot, tick, command, alone=True)
         return readings
 
     async def idle(self, command: Command, at: int) -> Readings:
