@@ -174,17 +174,11 @@ class LockstepDoor(Generic[S]):
         self._handing_in(robot, tick)
         return self.schedule.hand_in(robot, tick, command)
 
-    async def step(
-        self, robot: str, tick: int, command: Command, *, alone: bool = False
-    ) -> Readings:
-        """Hand in ``robot``'s command for ``tick``; returns its readings after that tick.
-        ``alone``: the caller is the one waiter on ``robot``'s readings (a robot in this
-        process, whose clock shares one exchange among its callers), so no shield is needed."""
+    async def step(self, robot: str, tick: int, command: Command) -> Readings:
+        """Hand in ``robot``'s command for ``tick``; returns its readings after that tick."""
         waiter = self.submit(robot, tick, command)
         if waiter.done():  # this command completed the tick: still give others a turn
             await asyncio.sleep(0)
-        if alone:  # (cancelled, it cancels the waiter: the next one gets a fresh one)
-            return await waiter
         # Shielded: a retry of this step shares the waiter, and a caller that gives up its
         # call (its task was cancelled) must not take the retry's readings down with it.
         return await asyncio.shield(waiter)
@@ -294,7 +288,7 @@ class LockstepDoor(Generic[S]):
     def waiter(self, robot: str) -> asyncio.Future[Readings]:
         """The future ``robot``'s caller waits on for its next readings (made if none)."""
         waiter = self._waiters.get(robot)
-        if waiter is None or waiter.cancelled():  # (an ``alone`` caller that gave up)
+        if waiter is None:
             waiter = self._waiters[robot] = asyncio.get_running_loop().create_future()
         return waiter
 

@@ -14,7 +14,7 @@ from collections.abc import AsyncIterator, Callable
 from mover._futures import failure
 from robots.hal import HardwareLost, LostLatch
 
-from ._link import WorldLink
+from ._link import DoorLink, WorldLink
 from ._types import Command, Readings
 
 
@@ -23,10 +23,11 @@ class Ticks(LostLatch):
 
     * ``tick(make)`` hands in ``make()`` (the command, built when the exchange starts) for the
       tick of the current readings and waits for the next readings. Concurrent callers share
-      the exchange under way. The exchange runs as its own task: a caller that is cancelled
-      leaves it to finish in the background (the world never sees half an exchange, and never
-      a second command for the tick), and the next ``tick`` takes its readings as its own (the
-      tick's command went in already).
+      the exchange under way. The exchange runs as its own task (or, in the world's own
+      process, is the door's future of the readings, the command handed in at once): a caller
+      that is cancelled leaves it to finish in the background (the world never sees half an
+      exchange, and never a second command for the tick), and the next ``tick`` takes its
+      readings as its own (the tick's command went in already).
     * The readings change only inside a call of this robot's (``tick``, or leaving
       ``idling``), never when the world happens to answer: after a caller was cancelled the
       readings stay those it handed its command in on until the next ``tick``. So what a
@@ -64,8 +65,10 @@ class Ticks(LostLatch):
         self._link = link
         self._tick_of, self._time_of, self._after = tick_of, time_of, after
         self._period = period
-        self._task: asyncio.Task[tuple[int, Command, Readings]] | None = None
-        self._exchanges = 0  # exchanges started
+        self._door = link if isinstance(link, DoorLink) else None  # (see submit there)
+        self._task: asyncio.Future[Readings] | None = None  # the last exchange started
+        self._command: Command = {}  # its command
+        self._exchanges = 0  # exchanges started (the last one's number)
         self._taken = 0  # the last exchange whose readings are in (see take)
         self._idle = False
         self._handed = -math.inf  # time of the readings the last command was handed in on
@@ -98,12 +101,34 @@ class Ticks(LostLatch):
             await self._wait_change()  # held (see hold): until released
         task = self._task
         if task is None or self._taken_all():
-            self._exchanges += 1
-            exchange = self._exchange(self._exchanges, make)
-            task = self._task = asyncio.get_running_loop().create_task(exchange)
-            task.add_done_callback(failure)
-        await asyncio.shield(task)
+            task = self._begin(make)
+            if task.done():  # this command completed the tick: still give others a turn
+                await asyncio.sleep(0)
+        await asyncio.shield(task)  # (which also takes a failure's exception as seen)
         self._take(task)
+
+    def _begin(self, make: Callable[[], Command]) -> asyncio.Future[Readings]:
+        """Start the next exchange: hand in ``make()`` for the tick of the readings."""
+        self._check()
+        command = self._command = make()
+        self._exchanges += 1
+        self._handed = self.now()
+        self._pulse()
+        tick = self._tick_of(self.readings)
+        task: asyncio.Future[Readings]
+        if self._door is None:
+            task = asyncio.get_running_loop().create_task(self._exchange(tick, command))
+            task.add_done_callback(failure)
+        else:
+            try:
+                task = self._door.submit(tick, command)
+            except HardwareLost as exc:
+                self.lose(exc)
+                task = asyncio.get_running_loop().create_future()
+                task.set_exception(exc)
+                task.add_done_callback(failure)  # (seen even if no caller awaits it)
+        self._task = task
+        return task
 
     async def changed(self) -> None:
         """Return at the next change: readings taken, a command handed in, a hold, idling
@@ -122,14 +147,15 @@ class Ticks(LostLatch):
             self._taken = self._exchanges
         return self._taken == self._exchanges
 
-    def _take(self, task: asyncio.Task[tuple[int, Command, Readings]]) -> None:
-        """Take the readings of ``task``, an exchange that ended well, unless a later exchange's
-        are in already (callers that shared it take them once)."""
-        number, command, readings = task.result()
-        if number > self._taken:
-            self._taken = number
+    def _take(self, task: asyncio.Future[Readings]) -> None:
+        """Take the readings of ``task``, an exchange that ended well, unless they are in
+        already (callers that shared it take them once; an exchange is begun only once the
+        readings of the one before are in)."""
+        readings = task.result()
+        if task is self._task and self._taken < self._exchanges:
+            self._taken = self._exchanges
             if self._after is not None:
-                self._after(command, readings)
+                self._after(self._command, readings)
             self.readings = readings
             self._pulse()
 
@@ -146,15 +172,8 @@ class Ticks(LostLatch):
             if lost is None and not task.cancelled():
                 self._take(task)
 
-    async def _exchange(
-        self, number: int, make: Callable[[], Command]
-    ) -> tuple[int, Command, Readings]:
-        self._check()
-        command = make()
-        self._handed = self.now()
-        self._pulse()
-        readings = await self._guard(self._link.exchange(self._tick_of(self.readings), command))
-        return number, command, readings
+    async def _exchange(self, tick: int, command: Command) -> Readings:
+        return await self._guard(self._link.exchange(tick, command))
 
     def hold(self, t: float | None) -> None:
         """Hand in no command on readings later than ``t`` until ``hold(None)``: a tick waits
