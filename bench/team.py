@@ -16,7 +16,10 @@ With the 10 members, ``ps_wall_s_10`` and ``call_wall_s``: the wall time of ``mo
 ``mover call m000 echo`` run as a user runs them (a new process each; median of three).
 
 (r) ``robot_rss_mb``: the RSS of a ``mover robot`` process (``python -m robots``) in a lock-step
-world, after its first ticks.
+world, after its first ticks; ``robot_pss_mb`` its proportional set size (the pages it shares
+with the other processes of the run, libraries mostly, counted in shares) and
+``robot_rss_shared_libs_mb`` the part of its RSS that is the zenoh, cryptography, OpenSSL and
+Python libraries' file pages (the same pages in every robot process of a machine).
 
 (b) Load: ``--members`` members in the picked topology, each calling random others in a loop
 (one call in flight, a bounded ``--call-timeout``) for ``--seconds``. ``lost_replies_N``: calls
@@ -264,9 +267,9 @@ async def _wall(verb: list[str], env: dict[str, str], lines: int) -> float:
     return wall
 
 
-async def robot_rss(env: dict[str, str]) -> float:
-    """RSS in MB of a ``mover robot`` process (``python -m robots``) in a lock-step world,
-    after its first ticks (its pose read through the world)."""
+async def robot_rss(env: dict[str, str]) -> tuple[float, float, float]:
+    """RSS, PSS and the libraries' file pages (MB) of a ``mover robot`` process (``python -m
+    robots``) in a lock-step world, after its first ticks (its pose read through the world)."""
     from mover.testing import cluster
 
     async with cluster() as c, c.launcher() as node:
@@ -275,9 +278,21 @@ async def robot_rss(env: dict[str, str]) -> float:
         await node.membership.wait_for(["world", "ernst"], timeout=30)
         await node.call("ernst", "robot.pose", timeout=10)
         await asyncio.sleep(1.0)
-        status = Path(f"/proc/{proc.pid}/status").read_text()
-        kb = int(next(x for x in status.splitlines() if x.startswith("VmRSS")).split()[1])
-    return kb / 1024
+        rollup = Path(f"/proc/{proc.pid}/smaps_rollup").read_text().splitlines()
+        rss, pss = (int(next(x for x in rollup if x.startswith(k)).split()[1]) for k in KEYS)
+        libs, name = 0, ""
+        for line in Path(f"/proc/{proc.pid}/smaps").read_text().splitlines():
+            words = line.split()
+            if "-" in words[0] and len(words) >= 5:  # a mapping's first line: its file last
+                name = words[5].rsplit("/", 1)[-1] if len(words) > 5 else ""
+            elif words[0] == "Rss:" and name.startswith(LIBS):
+                libs += int(words[1])
+    return rss / 1024, pss / 1024, libs / 1024
+
+
+KEYS = ("Rss:", "Pss:")
+LIBS = ("zenoh.", "_rust.", "libcrypto", "libssl", "libpython")
+"""The shared libraries of a robot process whose file pages robot_rss counts apart."""
 
 
 async def load(
@@ -343,9 +358,15 @@ async def main(args: argparse.Namespace) -> dict[str, Any]:
         out["lease_ms"] = args.lease_ms
     parts = set(args.parts.split(","))
     if "robot" in parts:
-        rss = await robot_rss(env)
+        rss, pss, libs = await robot_rss(env)
         out["robot_rss_mb"] = round(rss, 1)
-        print(f"a robot process in a lock-step world: {rss:.1f} MB RSS", flush=True)
+        out["robot_pss_mb"] = round(pss, 1)
+        out["robot_rss_shared_libs_mb"] = round(libs, 1)
+        print(
+            f"a robot process in a lock-step world: {rss:.1f} MB RSS ({pss:.1f} MB PSS; "
+            f"{libs:.1f} MB of it the zenoh, cryptography, OpenSSL and Python libraries)",
+            flush=True,
+        )
     if "idle" in parts:
         for size in sorted({10, args.members}):
             picked = needs_router(size)
