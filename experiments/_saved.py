@@ -16,7 +16,7 @@ from collections.abc import Callable, Iterator, Sequence
 from contextlib import ExitStack
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Any, Generic, TypeVar
 
 from mover.cli import UsageError
 
@@ -175,8 +175,9 @@ def run_pool(
     :class:`JobFailed` names it (``describe``)."""
     made = 0
     on = on or Executor()
-    runs = _local if on.kind == "local" else _dask
-    for rec in runs(jobs, work, workers, on.address, describe):
+    batch = _Batch(jobs, work, describe)
+    records = _local(batch, workers) if on.kind == "local" else _dask(batch, workers, on.address)
+    for rec in records:
         made += 1
         if save_to is not None:
             path = save_to(rec)
@@ -190,22 +191,30 @@ def run_pool(
     return made
 
 
-def _local(
-    jobs: Sequence[Job],
-    work: Callable[[Job], Record],
-    workers: int,
-    address: str | None,
-    describe: Callable[[Job], str],
-) -> Iterator[Record]:
-    guarded = _Guarded(work)
+@dataclass(frozen=True)
+class _Batch(Generic[Job]):
+    """What an executor is handed: the jobs, the work that makes a job's record, and how a job
+    is named when it fails."""
+
+    jobs: Sequence[Job]
+    work: Callable[[Job], Record]
+    describe: Callable[[Job], str]
+
+    def failed(self, job: Job, error: str) -> JobFailed:
+        """The error that stops the sweep: ``job`` raised ``error`` (its type and message)."""
+        return JobFailed(f"{self.describe(job)} raised {error}")
+
+
+def _local(batch: _Batch[Job], workers: int) -> Iterator[Record]:
+    guarded = _Guarded(batch.work)
     if workers <= 1:  # in this process: no fork for a single worker
-        made: Iterator[tuple[int, Record | str]] = map(guarded, enumerate(jobs))
-        yield from _or_fail(made, jobs, describe)
+        made: Iterator[tuple[int, Record | str]] = map(guarded, enumerate(batch.jobs))
+        yield from _or_fail(made, batch)
         return
     ctx = multiprocessing.get_context("fork")
     with ctx.Pool(max(1, workers), initializer=_worker) as pool:
-        made = pool.imap_unordered(guarded, enumerate(jobs), chunksize=1)
-        yield from _or_fail(made, jobs, describe)
+        made = pool.imap_unordered(guarded, enumerate(batch.jobs), chunksize=1)
+        yield from _or_fail(made, batch)
 
 
 class _Guarded:
@@ -223,12 +232,10 @@ class _Guarded:
             return index, f"{type(exc).__name__}: {exc}"
 
 
-def _or_fail(
-    made: Iterator[tuple[int, Record | str]], jobs: Sequence[Job], describe: Callable[[Job], str]
-) -> Iterator[Record]:
+def _or_fail(made: Iterator[tuple[int, Record | str]], batch: _Batch[Job]) -> Iterator[Record]:
     for index, rec in made:
         if isinstance(rec, str):
-            raise JobFailed(f"{describe(jobs[index])} raised {rec}")
+            raise batch.failed(batch.jobs[index], rec)
         yield rec
 
 
@@ -236,14 +243,8 @@ CONNECT_S = 30.0
 """The longest wait for a Dask scheduler to answer."""
 
 
-def _dask(
-    jobs: Sequence[Job],
-    work: Callable[[Job], Record],
-    workers: int,
-    address: str | None,
-    describe: Callable[[Job], str],
-) -> Iterator[Record]:
-    """The records of ``jobs`` as the cluster finishes them. A worker that dies is replaced
+def _dask(batch: _Batch[Job], workers: int, address: str | None) -> Iterator[Record]:
+    """The records of the batch's jobs as the cluster finishes them. A worker that dies is replaced
     and its jobs rerun by the scheduler (Dask's ``allowed-failures``); a job that raises is
     not retried: the others are cancelled and :class:`JobFailed` names it."""
     try:
@@ -272,14 +273,14 @@ def _dask(
                 client = stack.enter_context(dask.Client(address, timeout=CONNECT_S))
             except OSError as exc:
                 raise UsageError(f"--executor: no Dask scheduler at {address}: {exc}") from None
-        futures = {client.submit(work, job, pure=False): job for job in jobs}
+        futures = {client.submit(batch.work, job, pure=False): job for job in batch.jobs}
         for future in dask.as_completed(list(futures)):
             job = futures.pop(future)
             try:
                 rec = future.result()
             except Exception as exc:
                 client.cancel(list(futures))
-                raise JobFailed(f"{describe(job)} raised {type(exc).__name__}: {exc}") from None
+                raise batch.failed(job, f"{type(exc).__name__}: {exc}") from None
             future.release()
             yield rec
 

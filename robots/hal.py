@@ -40,6 +40,7 @@ __all__ = [
     "HardwareLost",
     "Led",
     "LostLatch",
+    "NoWorldAhead",
     "Odometry",
     "PushResult",
     "PushSense",
@@ -97,6 +98,15 @@ class HardwareLost(ExpectedFault):
     connects again, and a program that was running fails with it (an expected fault: reported
     in one line, not as a bug).
     """
+
+
+class NoWorldAhead:
+    """The ``reach`` of a clock that no world runs ahead of (a real robot's, a fake's): a robot
+    is sure to get past ``t`` at ``t`` itself (see :meth:`mover.IdleClock.reach`)."""
+
+    def reach(self, t: float) -> float:
+        """``t``: no world runs ahead of this robot's commands."""
+        return t
 
 
 class LostLatch:

@@ -38,7 +38,7 @@ from collections.abc import AsyncIterator, Callable
 from dataclasses import dataclass, field
 
 from .grid_hal import FREE, OFFSETS, GridHardware, Here, Near, Seen
-from .hal import Hardware, HardwareLost, Pose, sleep_in_ticks
+from .hal import Hardware, HardwareLost, NoWorldAhead, Pose, sleep_in_ticks
 
 __all__ = [
     "FakeClock",
@@ -57,7 +57,7 @@ __all__ = [
 ]
 
 
-class _Ticking:
+class _Ticking(NoWorldAhead):
     """What the fake clocks share: ticks that wait while held, their hooks, ``hold``,
     ``passed``, ``idling`` and a lost hardware. The time (``now``) is each clock's own.
 
@@ -106,10 +106,6 @@ class _Ticking:
             yield
         finally:
             self.idle = False
-
-    def reach(self, t: float) -> float:
-        """``t``: no world runs ahead of this robot's commands."""
-        return t
 
     def hold(self, t: float | None) -> None:
         """Hand in no command on readings later than ``t`` until ``hold(None)``."""

@@ -23,14 +23,14 @@ import time
 from collections.abc import AsyncIterator, Awaitable, Callable
 
 from mover._futures import failure
-from robots.hal import HardwareLost, LostLatch, sleep_in_ticks
+from robots.hal import HardwareLost, LostLatch, NoWorldAhead, sleep_in_ticks
 
 from ._devices import Readings
 
 __all__ = ["ThymioClock"]
 
 
-class ThymioClock(LostLatch):
+class ThymioClock(LostLatch, NoWorldAhead):
     """``robots.hal.Clock`` over a Thymio (see the module docstring).
 
     ``exchange()`` is the hardware's: send the commands that changed, read the sensors, return
@@ -105,10 +105,6 @@ class ThymioClock(LostLatch):
     def ticking(self) -> contextlib.AbstractAsyncContextManager[None]:
         """Nothing to do: a real robot goes on without ticks."""
         return contextlib.nullcontext()
-
-    def reach(self, t: float) -> float:
-        """``t``: no world runs ahead of this robot's commands."""
-        return t
 
     def hold(self, t: float | None) -> None:
         """The next ``tick()`` waits while the readings are later than ``t`` (see the module)."""

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import asyncio
 import json
-import os
 import sys
 
 import pytest
@@ -20,6 +19,7 @@ from mover.cli._topics import rates
 from mover.pytest_plugin import Starter
 from mover.testing import Cluster
 from programs.teleop import command
+from tests.helpers.procs import shell_env
 
 pytestmark = pytest.mark.processes
 
@@ -47,15 +47,8 @@ def test_the_rate_table_is_busiest_first() -> None:
 
 
 async def _mover(cluster: Cluster, *args: str, keys: bytes = b"") -> tuple[int, str, str]:
-    env = {
-        **os.environ,
-        "MOVER_TEAM": cluster.team.name,
-        "MOVER_TEAM_KEY": cluster.team.key.hex(),
-        "MOVER_CONNECT": f"tcp/127.0.0.1:{cluster.port}",
-    }
-    env.pop("MOVER_TEAM_KEY_FILE", None)
     proc = await asyncio.create_subprocess_exec(
-        sys.executable, "-m", "mover", *args, env=env,
+        sys.executable, "-m", "mover", *args, env=shell_env(cluster),
         stdin=asyncio.subprocess.PIPE, stdout=asyncio.subprocess.PIPE,
         stderr=asyncio.subprocess.PIPE,
     )  # fmt: skip

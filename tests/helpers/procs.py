@@ -6,6 +6,7 @@ The machinery is the public ``mover.testing``; this adds the test robot of tests
 from __future__ import annotations
 
 import asyncio
+import os
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from pathlib import Path
@@ -40,6 +41,15 @@ async def cluster(team: TeamCredentials | None = None) -> AsyncIterator[Cluster]
         yield c
     finally:
         await c.stop()
+
+
+def shell_env(cluster: _Cluster) -> dict[str, str]:
+    """The environment of a user's shell that runs ``mover`` verbs on ``cluster``'s team: this
+    one's, with the team's name and key and the seed endpoint (a key file it names is dropped,
+    so that the key given here is the one read)."""
+    env = {**os.environ, **cluster.team.env(), "MOVER_CONNECT": f"tcp/127.0.0.1:{cluster.port}"}
+    env.pop("MOVER_TEAM_KEY_FILE", None)
+    return env
 
 
 async def terminate(proc: asyncio.subprocess.Process, grace: float) -> None:

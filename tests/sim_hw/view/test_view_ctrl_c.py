@@ -16,6 +16,7 @@ pytest.importorskip("rerun", reason="the view extra (rerun-sdk) is not installed
 
 from mover._config import free_port
 from mover.testing import cluster
+from tests.helpers.procs import shell_env
 
 pytestmark = pytest.mark.processes
 
@@ -26,15 +27,8 @@ WORLD = str(ROOT / "worlds" / "search_and_rescue.toml")
 async def test_ctrl_c_to_the_views_process_group_is_one_line_and_a_clean_exit() -> None:
     async with cluster(cwd=ROOT) as c, c.launcher():
         await c.world(WORLD, expect=1)
-        env = {
-            **os.environ,
-            "MOVER_TEAM": c.team.name,
-            "MOVER_TEAM_KEY": c.team.key.hex(),
-            "MOVER_CONNECT": f"tcp/127.0.0.1:{c.port}",
-        }
-        env.pop("MOVER_TEAM_KEY_FILE", None)
         view = await asyncio.create_subprocess_exec(
-            sys.executable, "-m", "mover", "view", "--port", str(free_port()), env=env,
+            sys.executable, "-m", "mover", "view", "--port", str(free_port()), env=shell_env(c),
             stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.PIPE,
             start_new_session=True,  # its own process group, as a terminal's foreground job
         )  # fmt: skip
