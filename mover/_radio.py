@@ -42,6 +42,9 @@ if TYPE_CHECKING:
 
 PUBLISHERS = 64  # publishers kept per node (cells visited, topics), least recently used dropped
 SETTLE = 1.0  # seconds a new publisher sends before its matching status is trusted
+MATCHED_FOR = 0.25
+"""Seconds a publisher found matched is taken as matched without asking zenoh again (asking
+costs ~1 µs and a hand-off each flush; a subscriber that left is sent to this much longer)."""
 FOLLOW = 0.1  # seconds between checks of a listening node's cell subscriptions
 
 
@@ -258,6 +261,15 @@ class _Topic:
         self.cells: CellSet | None = None
 
 
+@dataclass(slots=True)
+class _Publisher:
+    """A declared publisher: since when, and when a subscriber was last found matching it."""
+
+    pub: zenoh.Publisher
+    since: float
+    matched: float = -math.inf
+
+
 class PubSub:
     """A node's broadcasts and subscriptions (see the module).
 
@@ -274,7 +286,7 @@ class PubSub:
         self.team = team
         self.cells = os.environ.get("MOVER_RADIO_CELLS", "on") != "off"
         self._topics: dict[str, _Topic] = {}
-        self._publishers: dict[tuple[str, bool, bool], tuple[zenoh.Publisher, float]] = {}
+        self._publishers: dict[tuple[str, bool, bool], _Publisher] = {}
         self._outbox: dict[tuple[str, str, bool, bool], list[bytes]] = {}
         # (topic, level) -> the liveliness token saying this node sends there, and since when
         self._levels: dict[tuple[str, int], tuple[zenoh.LivelinessToken, float]] = {}
@@ -341,20 +353,23 @@ class PubSub:
     def _publisher(self, key: str, reliable: bool, express: bool) -> zenoh.Publisher | None:
         """The publisher for ``key``, or None if no subscriber has matched it for a while."""
         entry = self._publishers.pop((key, reliable, express), None)
+        now = time.monotonic()
         if entry is None:
             congestion = zenoh.CongestionControl.BLOCK if reliable else zenoh.CongestionControl.DROP
             pub = self.state.session().declare_publisher(
                 key, congestion_control=congestion, express=express
             )
-            entry = (pub, time.monotonic())
+            entry = _Publisher(pub, now)
             if len(self._publishers) >= PUBLISHERS:  # the least recently used goes
                 oldest = next(iter(self._publishers))
-                self._publishers.pop(oldest)[0].undeclare()
+                self._publishers.pop(oldest).pub.undeclare()
         self._publishers[(key, reliable, express)] = entry  # most recently used last
-        pub, since = entry
+        if now - entry.since < SETTLE or now - entry.matched < MATCHED_FOR:
+            return entry.pub
         # the stub says matching_status() -> bool; zenoh 1.10 has a property with .matching
-        if time.monotonic() - since < SETTLE or cast(Any, pub).matching_status.matching:
-            return pub
+        if cast(Any, entry.pub).matching_status.matching:
+            entry.matched = now
+            return entry.pub
         return None
 
     def subscribe(self, topic: str, maxlen: int) -> Subscription:

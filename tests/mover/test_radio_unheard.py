@@ -74,3 +74,20 @@ async def test_a_sender_in_a_cell_nobody_listens_to_sends_nothing() -> None:
         assert (sent, frames) == before[:2] and unheard == before[2] + 30
         assert [m.data for m in sub.drain()] == []  # out of range all along
         sub.close()
+
+
+async def test_a_topic_whose_last_listener_left_stops_costing_frames() -> None:
+    """A publisher found matched is trusted for ``MATCHED_FOR`` seconds without asking zenoh
+    again; once its listener has gone and that time is over, what it would send is counted
+    as unheard."""
+    async with team_nodes(["s", "r"]) as (sender, receiver):
+        sub = receiver.subscribe("brief")
+        await asyncio.sleep(SETTLE + 0.1)  # past the settle time: matching is asked of zenoh
+        await _send(sender, "brief", 5)
+        assert _sent(sender) == (5, 5, 0)  # matched: sent
+        sub.close()
+        await asyncio.sleep(_radio.MATCHED_FOR + 0.5)
+        await _send(sender, "brief", 10)
+        sent, frames, unheard = _sent(sender)
+        assert sent + unheard == 15 and frames == sent
+        assert unheard >= 5, f"still sent to a topic nobody listens to: {_sent(sender)}"
