@@ -86,6 +86,11 @@ class ExplorerAgent:
         self._round = 0  # rounds heard so far (``observe(heard_messages=...)`` calls)
         self._last_heard = np.zeros(len(starts))  # round an agent holding region r was heard
         self._holders: dict[int, dict[int, int]] = {}  # region -> {agent: cell last heard at}
+        # agent -> (round, cell, regions): the latest news of each agent, heard or passed on;
+        # CU-LVP passes it on in its messages (``news_rounds``), the baselines do not
+        self.gossip = getattr(policy, "news_rounds", 0) > 0
+        self._news: dict[int, tuple[int, int, tuple[int, ...]]] = {}
+        self._reconsidered = 0  # round a helper last chose its region again (``reconsider``)
         self._share: np.ndarray | None = None  # ``_share_of_region`` until the map, the
         # agent's cell, its regions or the agents heard change
         # Section III-B: regions from the initial map, where all unknown space counts as free.
@@ -162,6 +167,7 @@ class ExplorerAgent:
                 self._index(msg["pos"]), None if goal is None else self._index(goal), peer_regions
             )
             peers[sender] = peer
+            self._news[sender] = (self._round, peer.pos, tuple(sorted(peer_regions)))
             for r in peer_regions:
                 self._last_heard[r] = self._round
             for r, holders in self._holders.items():
@@ -170,6 +176,8 @@ class ExplorerAgent:
             for r in peer_regions:
                 self._holders.setdefault(r, {})[sender] = peer.pos
             merged |= peer_regions  # section III-B: regions merge when agents are in range
+        for msg in messages:
+            self._merge_news(msg)
         if set(peers) - self._heard_before:
             self._send_full = True  # a newcomer missed our earlier deltas
         self._heard_before = set(peers)
@@ -186,6 +194,28 @@ class ExplorerAgent:
             self._flat[new] = value
             self._fresh[new] = True  # passed on in this agent's next message
 
+    def _merge_news(self, msg: dict[str, Any]) -> None:
+        """Take the news of agents a message passes on (``"news"``: id, round heard, cell,
+        regions) where it is newer than this agent's; the regions' last-heard rounds and
+        holders follow, as if the agent had heard those agents itself at that round."""
+        for aid, rnd, pos, regions in msg.get("news", ()):
+            if aid == self.id or self._news.get(aid, (-1,))[0] >= rnd:
+                continue
+            self._news[aid] = (rnd, pos, tuple(regions))
+            for r in regions:
+                self._last_heard[r] = max(self._last_heard[r], rnd)
+            for r, holders in self._holders.items():
+                if r not in regions:
+                    holders.pop(aid, None)
+            for r in regions:
+                self._holders.setdefault(r, {})[aid] = pos
+
+    def _gossip(self) -> list[list[Any]]:
+        """The news this agent passes on: every other agent's latest (``gossip``, CU-LVP's)."""
+        if not self.gossip:
+            return []
+        return [[aid, rnd, pos, list(regions)] for aid, (rnd, pos, regions) in self._news.items()]
+
     def _cells(self) -> dict[str, Any]:
         """The map cells learned since the last message (all of them for a newcomer)."""
         mask = (self._flat != UNKNOWN) & ~self._border.ravel() if self._send_full else self._fresh
@@ -193,7 +223,11 @@ class ExplorerAgent:
         free = np.flatnonzero(mask & (self._flat == FREE)).astype(self._dtype)
         obstacle = np.flatnonzero(mask & (self._flat == OBSTACLE)).astype(self._dtype)
         self._fresh[:] = False
-        return {"id": self.id, "free": free.tobytes(), "obstacle": obstacle.tobytes()}
+        out = {"id": self.id, "free": free.tobytes(), "obstacle": obstacle.tobytes()}
+        news = self._gossip()
+        if news:
+            out["news"] = news
+        return out
 
     def outgoing_message(self) -> dict[str, Any]:
         """This round's broadcast: position, goal, regions and the map cells that changed."""
@@ -216,6 +250,7 @@ class ExplorerAgent:
         for msg in messages:
             if int(msg["id"]) != self.id:
                 self._merge_cells(msg)
+                self._merge_news(msg)
 
     # -- regions -----------------------------------------------------------------------------
     def set_regions(self, regions: set[int] | frozenset[int]) -> None:
@@ -283,9 +318,11 @@ class ExplorerAgent:
         own map, less ``STALE_RATE`` cells for every round since it last heard an agent holding
         that region (that agent has been exploring it since; never heard: since the start) but
         at most ``STALE_CAP`` of them (a lone holder of a large region nobody has heard from
-        has not done it all), less ``DIST_RATE`` cells per round of travel. Helpers thus go
-        where nobody was heard working lately rather than to the nearest region, which a
-        neighbour has often explored already; ties go to the nearer region."""
+        has not done it all), divided by 1 + ``HELP_SHARE`` for every other agent lately
+        known to hold the region (heard, or passed on), less ``DIST_RATE`` cells per round of
+        travel. Helpers thus go where nobody was heard working lately rather than to the
+        nearest region, which a neighbour has often explored already; ties go to the nearer
+        region. A helper chooses again every few rounds (``reconsider``)."""
         targets = (self._flat == UNKNOWN) & (self.region_of >= 0)
         if exclude_current:
             targets &= ~(self._in_region | self._in_merged)
@@ -307,6 +344,23 @@ class ExplorerAgent:
     STALE_RATE = 4.0  # cells an agent is assumed to explore per round in its region
     STALE_CAP = 0.4  # at most this share of a region's unknown cells is assumed done unseen
     DIST_RATE = 8.0  # extra cells of estimated work a round of travel costs
+    HELP_SHARE = 0.5  # each other agent holding a region takes this share of one's part
+    HELP_ROUNDS = 30  # ... counted while its news is at most this many rounds old
+
+    def _helpers(self, region: int) -> int:
+        """The other agents whose latest news (at most ``HELP_ROUNDS`` old) holds ``region``."""
+        return sum(
+            1
+            for rnd, _, regions in self._news.values()
+            if region in regions and rnd >= self._round - self.HELP_ROUNDS
+        )
+
+    def reconsider(self, every: int) -> None:
+        """A helper (an agent holding a region not its own) chooses its region again every
+        ``every`` rounds, as the work estimated left changes with the news."""
+        if self.regions != frozenset({self.id}) and self._round - self._reconsidered >= every:
+            self._reconsidered = self._round
+            self.switch_region()
 
     def _switch_by_estimate(self, targets: np.ndarray) -> bool:
         dist, _, found = wavefront(
@@ -325,13 +379,23 @@ class ExplorerAgent:
             done_unseen = min(
                 self.STALE_RATE * (self._round + d - self._last_heard[r]), self.STALE_CAP * unknown
             )
-            left = unknown - done_unseen - self.DIST_RATE * d
+            helping = self._helpers(r)
+            left = (unknown - done_unseen) / (1 + self.HELP_SHARE * helping) - self.DIST_RATE * d
             if best is None or (left, -d) > best[0]:
                 best = ((left, -d), int(r))
         assert best is not None
         self.set_regions({best[1]})
         self.goal = None
         return True
+
+    def recent_cells(self, rounds: int) -> list[int]:
+        """Cells of the agents not heard this round whose news (heard, or passed on by others)
+        is at most ``rounds`` rounds old: where they were then."""
+        return [
+            pos
+            for aid, (rnd, pos, _) in self._news.items()
+            if aid not in self.peers and rnd >= self._round - rounds
+        ]
 
     # -- moving ------------------------------------------------------------------------------
     def peer_cells(self) -> list[int]:

@@ -192,15 +192,28 @@ class CULVP(FrontierPolicy):
     the path the agent walks (``path_gain``). Goals held by agents in range are excluded while
     there are at least as many candidates as agents; a goal another agent in range also holds
     is given up by the agent with the larger id, and a goal explored by anyone is re-planned.
+
+    Beyond the paper, u_mnm also counts the agents not in range whose news is at most
+    ``news_rounds`` rounds old, at the cell they were then: every message passes on the
+    sender's latest news of each agent (round, cell, regions; ``ExplorerAgent._merge_news``),
+    so an agent also steers away from agents its neighbours heard lately.
     """
 
     name = "cu-lvp"
     region_choice = "estimate"  # see ExplorerAgent.switch_region
     partition = "balanced"  # regions of about equal size: see balanced_partition
+    news_rounds = 10  # agents out of range counted in u_mnm while their news is this fresh
+    reconsider_every = 3  # a helper chooses its region again this often (rounds; 0: never)
 
     def __init__(self, lam: float = 0.2, reach: int = 2) -> None:
         self.lam = lam
         self.reach = reach
+
+    def decide(self, agent: ExplorerAgent) -> Move:
+        """A helper first reconsiders its region (``reconsider_every``), then as the base."""
+        if self.reconsider_every > 0:
+            agent.reconsider(self.reconsider_every)
+        return super().decide(agent)
 
     def keep(self, agent: ExplorerAgent, goal: int) -> bool:
         """Give the goal up if a heard agent with a smaller id holds it too."""
@@ -234,6 +247,8 @@ class CULVP(FrontierPolicy):
             return found[0]
         found.sort()
         agents = [agent.pos, *agent.peer_cells()]
+        if self.news_rounds > 0:
+            agents += agent.recent_cells(self.news_rounds)
         mnm = [float(sum(_manhattan(f, a, agent.width) for a in agents)) for f in found]
         jgr = [
             float(gain[agent.pos] + sum(gain[x] for x in path_to(parent, agent.pos, f)))

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import msgpack
 import numpy as np
 import pytest
@@ -255,3 +257,32 @@ def test_agents_sharing_a_region_split_it() -> None:
     assert shared(19) == ([13], [14, 15, 16, 22, 23])
     # holder at 16: no unknown cell of the region is nearer the helper, so it takes them all
     assert shared(16) == ([13, 19, 20, 21, 22, 23], [13, 19, 20, 21, 22, 23])
+
+
+def _wire(msg: dict[str, Any]) -> dict[str, Any]:
+    """A message as the hearer gets it: packed and unpacked."""
+    out: dict[str, Any] = msgpack.unpackb(msgpack.packb(msg))
+    return out
+
+
+def test_news_of_agents_out_of_range_is_passed_on() -> None:
+    starts = [(1, 1), (1, 4), (1, 7)]
+    team = make_team("cu-lvp", (9, 9), starts, 3)
+    a0, a1, a2 = team
+    for a in team:
+        a.observe(heard_messages=[])  # round 1: nobody in range
+    a1.observe(heard_messages=[_wire(a0.outgoing_message())])  # round 2: a1 hears a0
+    a2.observe(heard_messages=[])
+    a2.observe(heard_messages=[_wire(a1.outgoing_message())])  # round 3: a2 hears a1 only
+    assert a2.recent_cells(10) == [a0.pos]  # a0, heard by a1 a round ago; a1 is in range
+    assert a2.recent_cells(0) == []  # ... but not news of this round
+    assert a2._helpers(0) == 1 and a2._helpers(1) == 1 and a2._helpers(2) == 0
+    # older news does not replace newer: a2 hears a0 itself, then a1's stale word of it
+    a2.observe(heard_messages=[_wire(a0.outgoing_message())])
+    stale = _wire(a1.relay_message() | {"news": [[0, 2, 99, [5]]]})
+    a2.hear_relay([stale])
+    assert a2._news[0] == (4, a0.pos, (0,))
+    # the baselines pass no news on
+    nf = make_team("nf", (9, 9), starts, 3)
+    nf[1].observe(heard_messages=[_wire(nf[0].outgoing_message())])
+    assert "news" not in nf[1].outgoing_message()
