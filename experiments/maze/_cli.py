@@ -80,6 +80,14 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         help="CU-LVP's regions: balanced (default: about equal sizes) or voronoi (the plain"
         " partition, as before)",
     )
+    parser.add_argument(
+        "--news",
+        choices=("on", "off"),
+        default="on",
+        help="CU-LVP's agents pass on each other's latest news (default on); off: CU-LVP as"
+        " before 2026-12-04 (no news passed on; helpers neither share a region's work by it"
+        " nor choose their region again)",
+    )
     parser.add_argument("--maze", type=Path, default=None, help="run on this maze JSON file")
     add_figure_arguments(parser)
     parser.add_argument(
@@ -127,6 +135,7 @@ def settings(args: argparse.Namespace) -> MazeSettings:
         p=tuple(args.p),
         exchanges=args.exchanges,
         partition=args.partition,
+        news=args.news == "on",
         maze=maze,
         maze_path=args.maze,
         out=None if args.no_plots else args.out,
@@ -150,6 +159,7 @@ def run(args: argparse.Namespace) -> int:
         f"runs: {s.runs} (hedac {s.runs_for('hedac')})  "
         + (f"maze: {s.maze_path}" if s.maze_path else f"size: {s.size}  p: {list(s.p)}")
         + f"  exchanges: {s.exchanges}  partition: {s.partition}"
+        + ("" if s.news else "  news: off")
     )
     records = trials(s)
     _report(records, list(s.methods), list(s.agents), s)

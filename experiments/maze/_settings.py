@@ -31,6 +31,7 @@ class MazeSettings:
     p: tuple[float, ...]
     exchanges: int = EXCHANGES
     partition: str = "balanced"  # CU-LVP's regions (robots.explore.PARTITIONS)
+    news: bool = True  # CU-LVP's agents pass on each other's news (robots.explore.make_policy)
     maze: Maze | None = None
     maze_path: Path | None = None
     out: Path | None = None

@@ -62,13 +62,15 @@ def run_trial(
     max_rounds: int | None = None,
     exchanges: int = EXCHANGES,
     partition: str = "balanced",
+    news: bool = True,
 ) -> dict[str, Any]:
     """One seeded exploration run; returns its metrics (section IV-C). ``exchanges`` is the
     number of map exchanges per round (:data:`robots.explore.EXCHANGES`; 1: the paper's);
-    ``partition``, CU-LVP's regions (:data:`robots.explore.PARTITIONS`)."""
+    ``partition``, CU-LVP's regions (:data:`robots.explore.PARTITIONS`); ``news``, whether
+    CU-LVP's agents pass on each other's news (:func:`robots.explore.make_policy`)."""
     world = maze_world(maze, n_agents)
     cells = [world.agent_cell(i) for i in range(n_agents)]
-    team = make_team(method, maze.shape, cells, seed, partition)
+    team = make_team(method, maze.shape, cells, seed, partition, news)
     target = observable(maze.grid, cells)
     n_target = int(target.sum())
     known = np.zeros(maze.shape, dtype=bool)
@@ -205,20 +207,23 @@ def one_run(job: Job) -> dict[str, Any]:
         rng = np.random.default_rng(_seq(s.seed, s.size, code, run))
         maze = generate_maze(s.size, p, rng, n_starts=max(s.agents))
     key = (s.seed, s.size, code, run, n, list(METHODS).index(m))
-    rec = run_trial(maze, n, m, _seq(*key), exchanges=s.exchanges, partition=s.partition)
+    rec = run_trial(
+        maze, n, m, _seq(*key), exchanges=s.exchanges, partition=s.partition, news=s.news
+    )
     rec.update(method=m, agents=n, p=_p(p), run=run, seed=s.seed)
     return rec
 
 
 def point_file(s: MazeSettings, method: str, agents: int, p: float | None) -> Path:
     """The file of one point's runs under ``s.save``: the method, agent count, maze (size and
-    p, or the maze file's name), exchanges and CU-LVP's plain partition name it, so that other
-    settings save apart (CU-LVP's runs before the balanced partition used that file's name
-    without ``-voronoi``)."""
+    p, or the maze file's name), exchanges and CU-LVP's plain partition and news switched off
+    name it, so that other settings save apart (CU-LVP's runs before the balanced partition
+    used the file's name without ``-voronoi``, its runs before the news without ``-nonews``)."""
     assert s.save is not None
     where = f"file-{s.maze_path.stem}" if s.maze_path is not None else f"s{s.size}-p{p:g}"
     plain = "-voronoi" if method == "cu-lvp" and s.partition == "voronoi" else ""
-    return s.save / f"{method}-n{agents}-{where}-x{s.exchanges}{plain}.jsonl"
+    quiet = "-nonews" if method == "cu-lvp" and not s.news else ""
+    return s.save / f"{method}-n{agents}-{where}-x{s.exchanges}{plain}{quiet}.jsonl"
 
 
 def describe(job: Job) -> str:

@@ -36,9 +36,11 @@ PARTITIONS = ("balanced", "voronoi")
 """CU-LVP's regions: of about equal size (the default), or the plain Voronoi partition."""
 
 
-def make_policy(method: str, partition: str = "balanced") -> Policy:
+def make_policy(method: str, partition: str = "balanced", news: bool = True) -> Policy:
     """A fresh policy for ``method`` (one of :data:`METHODS`) with the paper's parameters;
-    ``partition`` (one of :data:`PARTITIONS`) sets CU-LVP's regions (the baselines': plain)."""
+    ``partition`` (one of :data:`PARTITIONS`) sets CU-LVP's regions (the baselines': plain).
+    ``news=False``: CU-LVP as before its agents passed on each other's news (none passed on,
+    helpers neither share a region's work by it nor choose their region again)."""
     if partition not in PARTITIONS:
         raise ValueError(f"unknown partition {partition!r}; choose from {', '.join(PARTITIONS)}")
     try:
@@ -47,6 +49,9 @@ def make_policy(method: str, partition: str = "balanced") -> Policy:
         raise ValueError(f"unknown method {method!r}; choose from {', '.join(METHODS)}") from None
     if isinstance(policy, CULVP):
         policy.partition = partition
+        if not news:
+            policy.news_rounds = policy.reconsider_every = 0
+            policy.help_share = 0.0
     return policy  # type: ignore[no-any-return]
 
 
@@ -56,15 +61,19 @@ def make_team(
     starts: list[tuple[int, int]],
     seed: int | np.random.SeedSequence,
     partition: str = "balanced",
+    news: bool = True,
 ) -> list[ExplorerAgent]:
-    """One agent per start cell, each with its own policy and an independent seeded stream."""
+    """One agent per start cell, each with its own policy (``make_policy``) and an independent
+    seeded stream."""
     seqs = (
         np.random.SeedSequence(seed).spawn(len(starts))
         if isinstance(seed, int)
         else seed.spawn(len(starts))
     )
     return [
-        ExplorerAgent(i, shape, starts, make_policy(method, partition), np.random.default_rng(s))
+        ExplorerAgent(
+            i, shape, starts, make_policy(method, partition, news), np.random.default_rng(s)
+        )
         for i, s in enumerate(seqs)
     ]
 

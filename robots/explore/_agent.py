@@ -89,6 +89,9 @@ class ExplorerAgent:
         # agent -> (round, cell, regions): the latest news of each agent, heard or passed on;
         # CU-LVP passes it on in its messages (``news_rounds``), the baselines do not
         self.gossip = getattr(policy, "news_rounds", 0) > 0
+        # each other agent lately known to hold a region takes this share of one's part of
+        # it (``switch_region``; CU-LVP's ``help_share``)
+        self._help_share: float = getattr(policy, "help_share", 0.0)
         self._news: dict[int, tuple[int, int, tuple[int, ...]]] = {}
         self._reconsidered = 0  # round a helper last chose its region again (``reconsider``)
         self._share: np.ndarray | None = None  # ``_share_of_region`` until the map, the
@@ -318,8 +321,8 @@ class ExplorerAgent:
         own map, less ``STALE_RATE`` cells for every round since it last heard an agent holding
         that region (that agent has been exploring it since; never heard: since the start) but
         at most ``STALE_CAP`` of them (a lone holder of a large region nobody has heard from
-        has not done it all), divided by 1 + ``HELP_SHARE`` for every other agent lately
-        known to hold the region (heard, or passed on), less ``DIST_RATE`` cells per round of
+        has not done it all), divided by 1 + the policy's ``help_share`` for every other agent
+        lately known to hold the region (heard, or passed on), less ``DIST_RATE`` cells per round of
         travel. Helpers thus go where nobody was heard working lately rather than to the
         nearest region, which a neighbour has often explored already; ties go to the nearer
         region. A helper chooses again every few rounds (``reconsider``)."""
@@ -344,8 +347,7 @@ class ExplorerAgent:
     STALE_RATE = 4.0  # cells an agent is assumed to explore per round in its region
     STALE_CAP = 0.4  # at most this share of a region's unknown cells is assumed done unseen
     DIST_RATE = 8.0  # extra cells of estimated work a round of travel costs
-    HELP_SHARE = 0.5  # each other agent holding a region takes this share of one's part
-    HELP_ROUNDS = 30  # ... counted while its news is at most this many rounds old
+    HELP_ROUNDS = 30  # other agents holding a region count while their news is this fresh
 
     def _helpers(self, region: int) -> int:
         """The other agents whose latest news (at most ``HELP_ROUNDS`` old) holds ``region``."""
@@ -380,7 +382,7 @@ class ExplorerAgent:
                 self.STALE_RATE * (self._round + d - self._last_heard[r]), self.STALE_CAP * unknown
             )
             helping = self._helpers(r)
-            left = (unknown - done_unseen) / (1 + self.HELP_SHARE * helping) - self.DIST_RATE * d
+            left = (unknown - done_unseen) / (1 + self._help_share * helping) - self.DIST_RATE * d
             if best is None or (left, -d) > best[0]:
                 best = ((left, -d), int(r))
         assert best is not None

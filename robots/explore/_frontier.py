@@ -204,6 +204,7 @@ class CULVP(FrontierPolicy):
     partition = "balanced"  # regions of about equal size: see balanced_partition
     news_rounds = 10  # agents out of range counted in u_mnm while their news is this fresh
     reconsider_every = 3  # a helper chooses its region again this often (rounds; 0: never)
+    help_share = 0.5  # each other agent lately known to hold a region takes this share of it
 
     def __init__(self, lam: float = 0.2, reach: int = 2) -> None:
         self.lam = lam

@@ -14,6 +14,9 @@ from mover.cli import UsageError
 from sim_hw.grid import generate_maze, save_maze
 
 
+RESULTS = Path(__file__).resolve().parents[2] / "results"
+
+
 def _parse(*argv: str) -> argparse.Namespace:
     parser = argparse.ArgumentParser()
     register(parser.add_subparsers(dest="cmd"))
@@ -137,6 +140,33 @@ def test_partition_option_names_the_saved_runs_apart(tmp_path: Path) -> None:
         for p in ("voronoi", "balanced")
     ]
     assert (nf[0]["rounds"], nf[0]["cost"]) == (nf[1]["rounds"], nf[1]["cost"])  # plain both
+
+
+
+def test_news_off_makes_the_stored_cu_lvp_runs_again(tmp_path: Path) -> None:
+    """``--news off`` (with the plain partition) is CU-LVP as the six-method tables stored it
+    (``results/maze/runs_cu-lvp.txt``, made before the balanced regions and the news): its
+    runs are made again, every figure but the wall-clock ones, and saved apart."""
+    from experiments.maze import settings
+    from experiments.maze._trial import one_run, point_file
+
+    stored = RESULTS / "maze" / "runs_cu-lvp.txt"
+    runs = json.loads(stored.read_text().splitlines()[-1])["runs"]
+    argv = ("--seed", "2026", "--agents", "1,2,4,6,8,10,15,20", "--methods", "cu-lvp")
+    old = settings(_parse(*argv, "--partition", "voronoi", "--news", "off", "--no-plots"))
+    new = settings(_parse(*argv, "--no-plots"))
+    assert (old.news, new.news) == (False, True)
+    old_save = settings(_parse("--news", "off", "--save", str(tmp_path), "--no-plots"))
+    assert point_file(old_save, "cu-lvp", 8, 0.85).name == "cu-lvp-n8-s30-p0.85-x3-nonews.jsonl"
+    assert point_file(old_save, "nf", 8, 0.85).name == "nf-n8-s30-p0.85-x3.jsonl"
+    clock = {"step_ms", "time_s"}
+    for want in [r for r in runs if r["run"] == 0 and r["agents"] in (4, 8)]:
+        job = (old, want["p"], 0, want["agents"], "cu-lvp")
+        made = one_run(job)
+        assert {k: v for k, v in made.items() if k not in clock | {"seed"}} == {
+            k: v for k, v in want.items() if k not in clock
+        }
+        assert one_run((new, want["p"], 0, want["agents"], "cu-lvp"))["rounds"] > 0
 
 
 def test_compare_reference_pairs_runs_per_maze(tmp_path: Path) -> None:
