@@ -13,7 +13,6 @@ from experiments.maze import register
 from mover.cli import UsageError
 from sim_hw.grid import generate_maze, save_maze
 
-
 RESULTS = Path(__file__).resolve().parents[2] / "results"
 
 
@@ -140,7 +139,6 @@ def test_partition_option_names_the_saved_runs_apart(tmp_path: Path) -> None:
         for p in ("voronoi", "balanced")
     ]
     assert (nf[0]["rounds"], nf[0]["cost"]) == (nf[1]["rounds"], nf[1]["cost"])  # plain both
-
 
 
 def test_news_off_makes_the_stored_cu_lvp_runs_again(tmp_path: Path) -> None:
