@@ -32,7 +32,7 @@ from mover._up import (
     UpError,
     load_team,
 )
-from mover.cli import UsageError, json_object, positive
+from mover.cli import UsageError, add_command, json_object, positive
 from sim_hw import STATE_TOPIC, WorldFileError, load_world
 from sim_hw._process import control_delay
 
@@ -45,10 +45,12 @@ DEFAULT_WORLD = ROOT / "worlds" / "search_and_rescue.toml"
 
 def register(sub: Any) -> None:
     """Add ``mover demo``."""
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "demo",
-        help="search and rescue with robot processes in a simulated world",
-        description=__doc__.split("\n\n")[0],
+        run,
+        "search and rescue with robot processes in a simulated world",
+        __doc__.split("\n\n")[0],
     )
     p.add_argument("--program", default="search_and_rescue", help="the program to run")
     p.add_argument("--world", default=str(DEFAULT_WORLD), help="the world file")
@@ -69,7 +71,6 @@ def register(sub: Any) -> None:
         help="the world applies a command K ticks after it was handed in (default 0; what a "
         "team across hosts runs with, see docs/reproducible-runs.md)",
     )
-    p.set_defaults(func=run)
 
 
 @dataclass(frozen=True)

@@ -22,6 +22,7 @@ from mover import ConfigError, NameTaken
 from mover.cli import (
     Terminated,
     UsageError,
+    add_command,
     add_log_arguments,
     add_team_arguments,
     interrupt_on_sigterm,
@@ -94,9 +95,7 @@ def backend_options(world: str | None, items: Sequence[str]) -> dict[str, Any]:
 
 def register_robot(sub: Any) -> None:
     """Add ``mover robot``."""
-    p = sub.add_parser("robot", help="run one robot process")
-    add_arguments(p)
-    p.set_defaults(func=run)
+    add_arguments(add_command(sub, "robot", run, "run one robot process"))
 
 
 def _member(path: str, name: str) -> dict[str, Any]:
@@ -118,7 +117,7 @@ def _member(path: str, name: str) -> dict[str, Any]:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Run the robot process of ``add_arguments``' options until interrupted."""
+    """Run one robot process, as its options say, until interrupted (Ctrl-C or SIGTERM)."""
     entry: dict[str, Any] = _member(args.team_file, args.name) if args.team_file else {}
     spec = dict(entry.get("spec", {}))
     if args.spec:

@@ -22,6 +22,7 @@ from typing import Any
 
 from .._exceptions import ConfigError
 from .._procs import ProcessExited
+from ..cli import add_command
 from . import _hosts
 from ._plan import PEER_MESH_MAX, members, needs_router
 from ._program import run_program
@@ -54,13 +55,10 @@ DESCRIPTION = (
 
 def register(sub: Any) -> None:
     """Add ``mover up``."""
-    p = sub.add_parser(
-        "up",
-        help="start a team from a team file and keep it running",
-        description=DESCRIPTION,
+    p = add_command(
+        sub, "up", run, "start a team from a team file and keep it running", DESCRIPTION
     )
     add_arguments(p)
-    p.set_defaults(func=run)
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -14,6 +14,8 @@ ways). Nothing here opens a session or reads the environment until it is called:
   else the process's default;
 * :func:`bounded` — the argparse type of every number with bounds (:func:`positive` and
   :func:`seed`, from 0 to ``MAX_SEED``, are two of them);
+* :func:`add_command` — a sub-command that runs a function, the function's docstring its
+  description (one copy of the text);
 * :class:`UsageError` — a command-line mistake, which a command prints as one line and exits 2.
 """
 
@@ -41,6 +43,7 @@ __all__ = [
     "MAX_SEED",
     "Terminated",
     "UsageError",
+    "add_command",
     "add_log_arguments",
     "add_team_arguments",
     "bounded",
@@ -159,6 +162,21 @@ _FORMAT = "%(asctime)s %(name)s %(levelname)s %(message)s"
 
 class UsageError(Exception):
     """A command-line mistake: printed as one line, exit code 2."""
+
+
+def add_command(
+    sub: argparse._SubParsersAction[argparse.ArgumentParser],
+    name: str,
+    run: Callable[[argparse.Namespace], int],
+    help: str,
+    description: str | None = None,
+) -> argparse.ArgumentParser:
+    """Add ``name`` to the sub-parsers ``sub``: it calls ``run(args)``; ``help`` is its line in
+    the parent's list, and ``description`` (by default ``run``'s docstring) what its ``--help``
+    prints."""
+    p = sub.add_parser(name, help=help, description=description or run.__doc__)
+    p.set_defaults(func=run)
+    return p
 
 
 def add_team_arguments(parser: argparse.ArgumentParser) -> None:

@@ -30,7 +30,7 @@ from typing import TYPE_CHECKING, Any
 from .._config import NodeConfig, TeamCredentials
 from .._exceptions import CallError, MoverError
 from .._programs import PROGRESS_TOPIC, launch, outcomes
-from . import add_team_arguments, bounded, member_name, team_from_args
+from . import add_command, add_team_arguments, bounded, member_name, team_from_args
 
 if TYPE_CHECKING:
     Sub = argparse._SubParsersAction[argparse.ArgumentParser]
@@ -58,10 +58,12 @@ def key_command(key: str, speed: float, turn: float) -> list[float] | str | None
 
 def register(sub: Sub) -> None:
     """Add ``mover drive``."""
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "drive",
-        help="drive a robot from the keyboard",
-        description="Start the `teleop` program on ROBOT and drive it with the keys: "
+        run_drive,
+        "drive a robot from the keyboard",
+        "Start the `teleop` program on ROBOT and drive it with the keys: "
         + HELP
         + ". Holding a key drives; the robot stops half a second after the last key. Read"
         " from a pipe, each character of each line is a key, 20 a second. Not while the robot is in"
@@ -81,7 +83,6 @@ def register(sub: Sub) -> None:
         help="turn rate in rad/s (default 1)",
     )
     add_team_arguments(p)
-    p.set_defaults(func=run_drive)
 
 
 def run_drive(args: argparse.Namespace) -> int:

@@ -33,6 +33,7 @@ from .._config import NodeConfig, _knobs_from_env, _read_overrides
 from .._endpoints import beyond_loopback_in_clear, check_endpoint
 from .._exceptions import ConfigError
 from .._keys import check_name
+from . import add_command
 from ._acl import team_acl
 
 DEFAULT_LISTEN = "tcp/127.0.0.1:7447"
@@ -58,10 +59,12 @@ TRANSPORT = {
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Add the ``router`` verb."""
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "router",
-        help="run a zenoh router, or write a secured config for one",
-        description=__doc__.split("\n\n")[0],
+        run,
+        "run a zenoh router, or write a secured config for one",
+        __doc__.split("\n\n")[0],
     )
     p.add_argument(
         "--listen",
@@ -90,7 +93,6 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         help="router address the members connect to (with --gen-config)",
     )
     p.add_argument("--port", type=int, default=7448, help="TLS port (with --gen-config)")
-    p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:

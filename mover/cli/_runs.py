@@ -25,6 +25,7 @@ from .._exceptions import CallError
 from .._keys import check_name
 from . import (
     UsageError,
+    add_command,
     json_object,
     member_name,
     seed,
@@ -61,14 +62,7 @@ _STATE_LIMIT = 1 << 20  # bytes of teams.json read at most
 
 def register_run(sub: Sub) -> None:
     """Add ``mover run``."""
-    p = sub.add_parser(
-        "run",
-        help="start an installed program on members of a team",
-        description="Starts PROGRAM on every chosen member (no code is sent: "
-        "members run their installed copy), shows progress, and prints each "
-        "member's outcome. The launcher is not a coordinator: with --detach it "
-        "exits once the run has started; --attach RUN follows it again.",
-    )
+    p = add_command(sub, "run", run_run, "start an installed program on members of a team")
     p.add_argument("program", nargs="?")
     p.add_argument(
         "--robots",
@@ -99,10 +93,12 @@ def register_run(sub: Sub) -> None:
         help="follow a run started earlier (progress and outcomes) instead of starting one",
     )
     _team_options(p)
-    p.set_defaults(func=run_run)
 
 
 def run_run(args: argparse.Namespace) -> int:
+    """Starts PROGRAM on every chosen member (no code is sent: members run their installed copy),
+    shows progress, and prints each member's outcome. The launcher is not a coordinator: with
+    --detach it exits once the run has started; --attach RUN follows it again."""
     if args.attach is not None:
         if args.program is not None:
             raise UsageError("give a PROGRAM to start or --attach RUN, not both")
@@ -360,17 +356,15 @@ async def _runs(team: TeamCredentials, config: NodeConfig, args: argparse.Namesp
 
 def register_cancel(sub: Sub) -> None:
     """Add ``mover cancel``."""
-    p = sub.add_parser(
-        "cancel",
-        help="end a run on every member (their finally blocks run)",
-        description="Cancels RUN on every member that knows it and prints each one's outcome.",
+    p = add_command(
+        sub, "cancel", _on_team(_cancel), "end a run on every member (their finally blocks run)"
     )
     p.add_argument("run", type=member_name)
     _team_options(p)
-    p.set_defaults(func=_on_team(_cancel))
 
 
 async def _cancel(team: TeamCredentials, config: NodeConfig, args: argparse.Namespace) -> int:
+    """Cancels RUN on every member that knows it and prints each one's outcome."""
     from .._node import Node
     from .._programs import CANCEL_WAIT
 

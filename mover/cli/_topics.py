@@ -24,7 +24,7 @@ import zenoh
 
 from .. import _keys
 from .._config import NodeConfig, TeamCredentials
-from . import add_team_arguments, bounded, team_from_args
+from . import add_command, add_team_arguments, bounded, team_from_args
 
 if TYPE_CHECKING:
     Sub = argparse._SubParsersAction[argparse.ArgumentParser]
@@ -57,14 +57,8 @@ def rates(counts: dict[str, tuple[int, int]], seconds: float) -> list[TopicRate]
 
 def register(sub: Sub) -> None:
     """Add ``mover topics``."""
-    p = sub.add_parser(
-        "topics",
-        help="the broadcast topics heard on the team, with their rates",
-        description="Listen to every broadcast of the team for --seconds and print each topic"
-        " heard: frames, frames per second and mean size. Counts are of sealed frames (a"
-        " member's broadcasts of one loop turn leave as one frame per topic); nothing is"
-        " decoded (`mover echo TOPIC` decodes one). A lock-step world sends nothing while no"
-        " run drives it.",
+    p = add_command(
+        sub, "topics", run_topics, "the broadcast topics heard on the team, with their rates"
     )
     p.add_argument(
         "--seconds",
@@ -75,11 +69,13 @@ def register(sub: Sub) -> None:
     )
     p.add_argument("--json", action="store_true", help="one JSON object per topic")
     add_team_arguments(p)
-    p.set_defaults(func=run_topics)
 
 
 def run_topics(args: argparse.Namespace) -> int:
-    """Listen, then print the table."""
+    """Listen to every broadcast of the team for --seconds and print each topic heard: frames,
+    frames per second and mean size. Counts are of sealed frames (a member's broadcasts of one
+    loop turn leave as one frame per topic); nothing is decoded (`mover echo TOPIC` decodes
+    one). A lock-step world sends nothing while no run drives it."""
     team, config = team_from_args(args)
     return asyncio.run(_topics(team, config, args.seconds, args.json))
 

@@ -27,6 +27,7 @@ from .._exceptions import CallError, NotDelivered, UnknownProcedure, WireError
 from .._keys import check_name
 from . import (
     UsageError,
+    add_command,
     add_team_arguments,
     bounded,
     json_argument,
@@ -70,6 +71,8 @@ def _on_team(verb: TeamVerb) -> Callable[[argparse.Namespace], int]:
     def run(args: argparse.Namespace) -> int:
         team, config = team_from_args(args)
         return asyncio.run(verb(team, config, args))
+
+    run.__doc__ = verb.__doc__
 
     return run
 
@@ -218,10 +221,12 @@ def _duration(seconds: float) -> str:
 
 def register_call(sub: Sub) -> None:
     """Add ``mover call``."""
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "call",
-        help="call a robot's exported procedure",
-        description="Arguments are JSON values: 3, 1.5, '\"text\"', '[1, 2]'.",
+        run_call,
+        "call a robot's exported procedure",
+        "Arguments are JSON values: 3, 1.5, '\"text\"', '[1, 2]'.",
     )
     p.add_argument("robot")
     p.add_argument("procedure", nargs="?", help="the procedure (not with --list)")
@@ -239,7 +244,6 @@ def register_call(sub: Sub) -> None:
     p.add_argument("--kwargs", metavar="JSON", help="keyword arguments as a JSON object")
     p.add_argument("--timeout", type=positive, default=10.0, help="seconds (default 10)")
     _team_options(p)
-    p.set_defaults(func=run_call)
 
 
 def run_call(args: argparse.Namespace) -> int:
@@ -317,13 +321,14 @@ def _plain(value: Any) -> Any:
 
 def register_keygen(sub: Sub) -> None:
     """Add ``mover keygen``."""
-    p = sub.add_parser("keygen", help="make a new team key")
+    p = add_command(sub, "keygen", run_keygen, "make a new team key")
     p.add_argument("--team", required=True)
     p.add_argument("--out", metavar="FILE", help="write the key (hex) to FILE, mode 600")
-    p.set_defaults(func=run_keygen)
 
 
 def run_keygen(args: argparse.Namespace) -> int:
+    """Make a new key for --team and print the shell lines that give it to mover (with --out,
+    the key goes to that file, mode 600, and the lines name the file)."""
     try:
         team = TeamCredentials.generate(args.team)
     except ValueError as exc:
@@ -348,13 +353,7 @@ def run_keygen(args: argparse.Namespace) -> int:
 
 def register_echo(sub: Sub) -> None:
     """Add ``mover echo``."""
-    p = sub.add_parser(
-        "echo",
-        help="print the messages of a broadcast topic, decoded",
-        description="Print each message on TOPIC as it comes: time, sender, distance and bearing"
-        " (from --at), and its data as JSON. Range-limited broadcasts reach an echo only when it"
-        " is given a place (--at) within their range, as they would a robot there.",
-    )
+    p = add_command(sub, "echo", run_echo, "print the messages of a broadcast topic, decoded")
     p.add_argument("topic", help="the topic, as programs name it (e.g. mover/run/RUN, hello)")
     p.add_argument(
         "--at",
@@ -371,7 +370,6 @@ def register_echo(sub: Sub) -> None:
     )
     p.add_argument("--json", action="store_true", help="one JSON object per message")
     _team_options(p)
-    p.set_defaults(func=run_echo)
 
 
 def _pose(text: str) -> tuple[float, float, float]:
@@ -385,6 +383,9 @@ def _pose(text: str) -> tuple[float, float, float]:
 
 
 def run_echo(args: argparse.Namespace) -> int:
+    """Print each message on TOPIC as it comes: time, sender, distance and bearing (from --at),
+    and its data as JSON. Range-limited broadcasts reach an echo only when it is given a place
+    (--at) within their range, as they would a robot there."""
     if not args.topic or len(args.topic) > 200 or any(c in args.topic for c in "*$#?"):
         raise UsageError(f"not a topic: {args.topic!r} (no wildcards, at most 200 characters)")
     team, config = team_from_args(args)

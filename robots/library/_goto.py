@@ -45,14 +45,19 @@ def steer(
             ry -= k * math.sin(a)
     dx, dy = math.cos(b) + 1.5 * fade * rx, math.sin(b) + 1.5 * fade * ry
     desired = math.atan2(dy, dx)
-    front = min(
-        (r for r, a in zip(ranges, angles, strict=False) if abs(wrap(a)) < 0.8), default=avoid_range
-    )
+    front = _ahead(ranges, angles, avoid_range)
     slow = clip((front - 0.03) / avoid_range, 0.0, 1.0) if fade > 0.5 else 1.0
     v = speed * max(0.0, math.cos(desired)) * max(slow, 0.15) * clip(dist / 0.3, 0.2, 1.0)
     if abs(desired) > 1.2:
         v = 0.0  # turn on the spot first
     return v, clip(gain * desired, -max_turn, max_turn)
+
+
+def _ahead(ranges: Sequence[float], angles: Sequence[float], none: float) -> float:
+    """The shortest range of the rays within 0.8 rad of straight ahead (``none`` if none)."""
+    return min(
+        (r for r, a in zip(ranges, angles, strict=False) if abs(wrap(a)) < 0.8), default=none
+    )
 
 
 def detour(
@@ -119,9 +124,7 @@ def sidestep(
     the side with more room (a small step of the bug algorithms).
     """
     b = bearing_to(pose, target)
-    front = min(
-        (r for r, a in zip(ranges, angles, strict=False) if abs(wrap(a)) < 0.8), default=math.inf
-    )
+    front = _ahead(ranges, angles, math.inf)
     if front > blocked or abs(b) > 1.2 or distance(pose, target) < front + 0.3:
         return None
     left = sum(r for r, a in zip(ranges, angles, strict=False) if 0.3 < wrap(a) < 2.0)

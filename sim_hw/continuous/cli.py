@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from mover import NameTaken
-from mover.cli import UsageError, positive
+from mover.cli import UsageError, add_command, positive
 from sim_hw._process import add_world_arguments, control_delay, rate, ready_line
 
 if TYPE_CHECKING:
@@ -32,7 +32,7 @@ log = logging.getLogger("sim_hw.continuous.cli")
 
 def register_world(sub: Any) -> None:
     """Add ``world`` to the ``mover`` command's sub-parsers."""
-    p = sub.add_parser("world", help="run a simulated world process", description=run_world.__doc__)
+    p = add_command(sub, "world", run_world, "run a simulated world process")
     p.add_argument("worldfile", metavar="WORLDFILE", help="a .toml or .json world file")
     p.add_argument(
         "--lockstep",
@@ -69,7 +69,6 @@ def register_world(sub: Any) -> None:
         "$MOVER_CONTROL_DELAY, else 0)",
     )
     add_world_arguments(p, name="world", timeout=2.0, tick="tick", seed="the sensor noise")
-    p.set_defaults(func=run_world)
 
 
 def run_world(args: argparse.Namespace) -> int:
@@ -151,10 +150,8 @@ def register_replay(sub: Any) -> None:
     """Add ``replay`` to the ``mover`` command's sub-parsers."""
     from sim_hw.view.cli import add_viewer_arguments
 
-    p = sub.add_parser(
-        "replay",
-        help="play a recorded run in the web viewer, or draw it to a PNG",
-        description=run_replay.__doc__,
+    p = add_command(
+        sub, "replay", run_replay, "play a recorded run in the web viewer, or draw it to a PNG"
     )
     p.add_argument("file", metavar="FILE", help="a recording made with mover world --record")
     p.add_argument(
@@ -164,7 +161,6 @@ def register_replay(sub: Any) -> None:
         "as MCAP with ROS 2 messages (.mcap), instead of showing it",
     )
     add_viewer_arguments(p)
-    p.set_defaults(func=run_replay)
 
 
 def run_replay(args: argparse.Namespace) -> int:

@@ -25,6 +25,7 @@ if TYPE_CHECKING:
 
 from mover.cli import (
     UsageError,
+    add_command,
     add_team_arguments,
     bounded,
     member_name,
@@ -51,13 +52,8 @@ def add_viewer_arguments(p: argparse.ArgumentParser) -> None:
 
 def register(sub: Any) -> None:
     """Add ``view`` to the ``mover`` command's sub-parsers."""
-    p = sub.add_parser(
-        "view",
-        help="see a running world live in a web browser (rerun's viewer)",
-        description="Show a running world in rerun's web viewer, served from this machine: "
-        "the page to open is printed. The view is an observer of the team from the "
-        "environment (MOVER_TEAM, the key, MOVER_CONNECT), not a member; several views may "
-        "watch one world, each on its own --port. Ctrl-C stops it.",
+    p = add_command(
+        sub, "view", run_view, "see a running world live in a web browser (rerun's viewer)"
     )
     p.add_argument(
         "--world",
@@ -74,7 +70,6 @@ def register(sub: Any) -> None:
         help="draw a line between robots within R metres (grid: cells) of each other",
     )
     add_team_arguments(p)
-    p.set_defaults(func=run_view)
 
 
 def _say(verb: str) -> Any:
@@ -82,7 +77,10 @@ def _say(verb: str) -> Any:
 
 
 def run_view(args: argparse.Namespace) -> int:
-    """Show a running world until interrupted."""
+    """Show a running world in rerun's web viewer, served from this machine: the page to open is
+    printed. The view is an observer of the team from the environment (MOVER_TEAM, the key,
+    MOVER_CONNECT), not a member; several views may watch one world, each on its own --port.
+    Ctrl-C stops it."""
     from ._server import ViewerServer, rerun_binary
 
     rerun_binary()  # rerun-sdk is there (the view extra), else one line before anything else
