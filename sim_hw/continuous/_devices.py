@@ -61,16 +61,19 @@ def sonar_ranges(
     through ``Space.segment_query_first``, which builds Python objects for every hit).
     """
     x, y, heading = pose
-    query = (group, CAT_QUERY, SOLID)
+    owner = _ffi.new("cpShapeFilter *", (group, CAT_QUERY, SOLID))
+    query = owner[0]  # one struct for every ray: a tuple is converted anew on each call
     out = []
     info = _INFO
     null = _ffi.NULL
     cspace = space._space
+    first = _lib.cpSpaceSegmentQueryFirst
+    cos, sin = math.cos, math.sin
     for a in angles:
-        c, s = math.cos(heading + a), math.sin(heading + a)
+        c, s = cos(heading + a), sin(heading + a)
         start = (x + c * radius, y + s * radius)
         end = (x + c * (radius + max_range), y + s * (radius + max_range))
-        if _lib.cpSpaceSegmentQueryFirst(cspace, start, end, 0.0, query, info) == null:
+        if first(cspace, start, end, 0.0, query, info) == null:
             out.append(max_range)
             continue
         r = info.alpha * max_range
