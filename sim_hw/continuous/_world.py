@@ -30,7 +30,7 @@ _T = TypeVar("_T")
 
 log = logging.getLogger("sim_hw.world")
 
-BATCH_FROM = 64
+BATCH_FROM = 128
 """Robots from which a tick's sonar is read in one batch (``_sonar``; measured: docs/physics.md)."""
 PUSH_REACH = 0.1
 """How far ahead of its rim a robot looks for the object it is asked to push (m)."""
