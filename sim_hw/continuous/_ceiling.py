@@ -66,27 +66,51 @@ class Ceiling:
         self._theta = np.array([e.heading for e in eyebots], dtype=float)
         self._view = np.array([e.view for e in eyebots], dtype=float)
         self._cone = np.array([e.cone for e in eyebots], dtype=float)
+        self._index = {eid: j for j, eid in enumerate(ids)}
         self._robots: list[str] = []
+        self._row: dict[str, int] = {}
         self._pose = np.zeros((0, 3))
         self._dist = np.zeros((0, len(ids)))
+        self._in_view: list[list[int]] = [[] for _ in ids]  # by eye-bot: the rows it sees
+        self._over: list[int | None] = []  # by row: the eye-bot whose cone reaches it
+        self._omni: list[list[int]] = []  # by row: the eye-bots in omni range, nearest first
 
     def sense(self, robots: Sequence[str] | None = None) -> None:
         """Take the foot-bots' poses of this tick (``robots``: which, default all)."""
         names = sorted(self.world.robots) if robots is None else list(robots)
         self._robots = names
         self._pose = np.array([self.world.pose(r) for r in names], dtype=float).reshape(-1, 3)
+        self._row = {r: i for i, r in enumerate(names)}
         delta = self._pose[:, None, :2] - self._xy[None, :, :]
-        self._dist = np.hypot(delta[..., 0], delta[..., 1])
+        self._dist = dist = np.hypot(delta[..., 0], delta[..., 1])
+        # what every device of the tick reads, worked out once for all (most eye-bots see
+        # nobody): the rows each eye-bot sees, in row order, and the nearest cone over each row
+        self._in_view = [[] for _ in self._ids]
+        eyes, rows = np.nonzero((dist <= self._view).T)
+        for j, i in zip(eyes.tolist(), rows.tolist(), strict=True):
+            self._in_view[j].append(i)
+        self._over = [None] * len(names)
+        if len(self._ids):
+            cones = np.where(dist <= self._cone, dist, np.inf)
+            nearest = np.argmin(cones, axis=1)
+            for i in np.flatnonzero(np.isfinite(cones[np.arange(len(names)), nearest])).tolist():
+                self._over[i] = int(nearest[i])
+        near = dist <= self.omni_range
+        order = np.argsort(np.where(near, dist, np.inf), axis=1, kind="stable")
+        self._omni = [o[:k] for o, k in zip(order.tolist(), near.sum(axis=1).tolist(), strict=True)]
 
     # -- the eye-bot's camera -----------------------------------------------------------------
 
     def camera(self, eyebot: str) -> list[Below]:
         """The foot-bots an eye-bot sees, in its frame."""
-        j = self._ids.index(eyebot)
+        j = self._index[eyebot]
+        rows = self._in_view[j]
+        if not rows:
+            return []
         ex, ey = self._xy[j]
         c, s = math.cos(self._theta[j]), math.sin(self._theta[j])
         out = []
-        for i in np.flatnonzero(self._dist[:, j] <= self._view[j]):
+        for i in rows:
             rid = self._robots[i]
             x, y, heading = self._pose[i]
             led = self.world.robots[rid].led
@@ -104,19 +128,18 @@ class Ceiling:
     def above(self, robot: str) -> tuple[str, float] | None:
         """The eye-bot whose broadcast reaches ``robot`` (the nearest if several do) and its θ0
         as the upward camera reads it (radians in the foot-bot's frame); None under none."""
-        i = self._robots.index(robot)
-        j = self._cone_over(i)
+        i = self._row[robot]
+        j = self._over[i]
         if j is None:
             return None
         return self._ids[j], _wrap(float(self._theta[j] - self._pose[i, 2]))
 
     def omni(self, robot: str) -> list[tuple[float, float]]:
         """(distance, bearing) of the eye-bots within ``omni_range``, nearest first."""
-        i = self._robots.index(robot)
+        i = self._row[robot]
         x, y, heading = self._pose[i]
         dist = self._dist[i]
-        near = np.flatnonzero(dist <= self.omni_range)
-        near = near[np.argsort(dist[near], kind="stable")]
+        near = self._omni[i]
         return [
             (float(dist[j]), _wrap(math.atan2(self._xy[j, 1] - y, self._xy[j, 0] - x) - heading))
             for j in near
@@ -125,15 +148,9 @@ class Ceiling:
     def under(self) -> Mapping[str, str | None]:
         """Which eye-bot's cone each foot-bot is in (None: none), for statistics."""
         out: dict[str, str | None] = {}
-        for i, rid in enumerate(self._robots):
-            j = self._cone_over(i)
+        for rid, j in zip(self._robots, self._over, strict=True):
             out[rid] = None if j is None else self._ids[j]
         return out
-
-    def _cone_over(self, i: int) -> int | None:
-        dist = self._dist[i]
-        inside = np.flatnonzero(dist <= self._cone)
-        return int(inside[np.argmin(dist[inside])]) if len(inside) else None
 
 
 def _frame(dx: float, dy: float, c: float, s: float) -> Vec:
