@@ -16,6 +16,7 @@ from mover import Node, TeamCredentials
 from mover.cli import (
     LOG_LEVEL_ENV,
     UsageError,
+    add_command,
     add_log_arguments,
     add_team_arguments,
     setup_logging,
@@ -76,6 +77,22 @@ def _team_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser()
     add_team_arguments(p)
     return p
+
+
+def test_a_command_runs_its_function_and_describes_itself_by_its_docstring() -> None:
+    def hello(args: argparse.Namespace) -> int:
+        """Say hello to NAME, once."""
+        return len(args.name)
+
+    parser = argparse.ArgumentParser(prog="mover")
+    sub = parser.add_subparsers()
+    add_command(sub, "hello", hello, "greet").add_argument("name")
+    add_command(sub, "bye", hello, "part", "Say goodbye.").add_argument("name")
+    args = parser.parse_args(["hello", "ada"])
+    assert args.func is hello and args.func(args) == 3
+    assert "Say hello to NAME, once." in sub.choices["hello"].format_help()
+    assert "Say goodbye." in sub.choices["bye"].format_help()
+    assert "greet" in parser.format_help() and "part" in parser.format_help()
 
 
 def test_team_arguments_default_to_the_environment(monkeypatch: pytest.MonkeyPatch) -> None:
