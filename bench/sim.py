@@ -3,7 +3,10 @@
     python bench/sim.py [--quick] [--no-procs] [--procs 10,50] [--other-topology]
 
 (a) the world alone: 10, 50, 200, 1000 in-process robots (8 sonar rays at 10 Hz, no camera, a
-trivial bounce-off-walls controller) through the lock-step WorldServer and the in-process HAL;
+trivial bounce-off-walls controller) through the lock-step WorldServer and the in-process HAL,
+where the world places them (rows 0.6 m apart from the bottom-left corner: a crowd, whatever
+the arena's size); and 1000 again spread over the arena on a square lattice (its density,
+about 4 m² a robot) as ``rtf_world_1000_spread``;
 (b) 10 and 50 robot processes (``python -m sim_hw.continuous._walker``) driving a random walk
 through the remote HAL over zenoh on 127.0.0.1, the world hosted in this process, in the
 topology ``mover up`` picks for a team of that size (``mover._up.needs_router``: the walkers and
@@ -19,6 +22,7 @@ network cost). The same 10 processes also run once with one call per tick instea
 (``rtf_procs_N_other``, and ``topology_gain_N = rtf_procs_N / rtf_procs_N_other``).
 
 The last line is one JSON object: rtf_world_10, rtf_world_50, rtf_world_200, rtf_world_1000,
+rtf_world_1000_spread,
 rtf_procs_10,
 rtf_procs_50, procs_topology_10, procs_topology_50, procs_efficiency_10, procs_efficiency_50,
 rtf_procs_10_calls, frames_speedup_10 (null where not measured), and with --other-topology
@@ -76,15 +80,22 @@ class _Timer:
         return (self.last_t - self.first_t) / max(self.last - self.first, 1e-9)
 
 
-async def world_alone(n: int, seconds: float) -> float:
-    """Real-time factor of n in-process robots for ``seconds`` simulated."""
-    server = WorldServer(World(_arena(n), seed=1), expect=n)
+async def world_alone(n: int, seconds: float, *, spread: bool = False) -> float:
+    """Real-time factor of n in-process robots for ``seconds`` simulated (``spread``: on a
+    square lattice over the whole arena, else where the world places them)."""
+    arena = _arena(n)
+    gap = arena.size[0] / math.ceil(math.sqrt(n))
+    server = WorldServer(World(arena, seed=1), expect=n)
     timer = _Timer(server.world)
     server.door.on_tick.append(timer)
     ticks = round(seconds / 0.1)
 
     async def robot(i: int) -> None:
-        hw = await in_process(server, f"r{i:03d}", ROBOT)
+        spec = dict(ROBOT)
+        if spread:
+            row, col = divmod(i, math.ceil(math.sqrt(n)))
+            spec["pose"] = [gap * (col + 0.5), gap * (row + 0.5), 0.0]
+        hw = await in_process(server, f"r{i:03d}", spec)
         turn = 1.0 if i % 2 else -1.0
         assert hw.sonar is not None
         for _ in range(ticks):
@@ -183,6 +194,9 @@ async def main(args: argparse.Namespace) -> dict[str, Any]:
         rtf = world[n] = await world_alone(n, seconds * scale)
         out[f"rtf_world_{n}"] = round(rtf, 1)
         print(f"world alone, {n:3d} robots: {rtf:7.1f}x real time", flush=True)
+    rtf = await world_alone(1000, 5.0 * scale, spread=True)
+    out["rtf_world_1000_spread"] = round(rtf, 1)
+    print(f"world alone, 1000 robots spread over the arena: {rtf:7.1f}x real time", flush=True)
     sizes = {int(x) for x in args.procs.split(",")}
     for n, seconds in ((10, 30.0), (50, 10.0)):
         key = f"rtf_procs_{n}"
