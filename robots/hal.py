@@ -32,6 +32,7 @@ __all__ = [
     "Bumper",
     "BumperSide",
     "Camera",
+    "Changes",
     "Clock",
     "Drive",
     "FloorCell",
@@ -109,6 +110,29 @@ class NoWorldAhead:
         return t
 
 
+class Changes:
+    """Something that changes now and then, and the tasks that wait for its next change:
+    :meth:`wait` returns at the next :meth:`pulse`. The event is made only while someone
+    waits (a clock pulses every tick, mostly with no one waiting)."""
+
+    __slots__ = ("_event",)
+
+    def __init__(self) -> None:
+        self._event: asyncio.Event | None = None
+
+    def pulse(self) -> None:
+        """Wake every task in :meth:`wait`."""
+        if self._event is not None:
+            self._event.set()
+            self._event = None
+
+    async def wait(self) -> None:
+        """Return at the next :meth:`pulse`."""
+        if self._event is None:
+            self._event = asyncio.Event()
+        await self._event.wait()
+
+
 class LostLatch:
     """The part of a ticking clock that keeps the hardware's loss and wakes its waits (a base
     of the Thymio's clock and of the simulated robot's ticks).
@@ -120,7 +144,7 @@ class LostLatch:
 
     def __init__(self) -> None:
         self._lost: HardwareLost | None = None
-        self._changed: asyncio.Event | None = None  # made when someone waits for a change
+        self._changes = Changes()
 
     def lose(self, exc: HardwareLost) -> None:
         """The hardware went away: every wait raises ``exc`` from now on."""
@@ -140,14 +164,10 @@ class LostLatch:
             raise self._lost
 
     def _pulse(self) -> None:
-        if self._changed is not None:  # (none made: no one waits)
-            self._changed.set()
-            self._changed = None
+        self._changes.pulse()
 
     async def _wait_change(self) -> None:
-        if self._changed is None:
-            self._changed = asyncio.Event()
-        await self._changed.wait()
+        await self._changes.wait()
 
 
 @dataclass(frozen=True, slots=True)

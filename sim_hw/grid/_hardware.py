@@ -20,6 +20,7 @@ from collections.abc import AsyncIterator, Mapping
 from typing import TYPE_CHECKING, Any
 
 from robots.grid_hal import OFFSETS, GridHardware, Here, Near, Seen
+from robots.hal import Changes
 from sim_hw import _link
 from sim_hw._link import WorldLink
 from sim_hw._robot import ClockView, TickedRobot
@@ -63,7 +64,7 @@ class GridRobot(TickedRobot):
         self._lock = asyncio.Lock()
         self._owner: object | None = None
         self._hold_at: int | None = None
-        self._changed = asyncio.Event()
+        self._changed = Changes()
 
     @property
     def readings(self) -> dict[str, Any]:
@@ -118,8 +119,7 @@ class GridRobot(TickedRobot):
             self._offset[1] += dc
 
     def _notify(self) -> None:
-        self._changed.set()
-        self._changed = asyncio.Event()
+        self._changed.pulse()
 
     async def _wait_change(self) -> None:
         await self._changed.wait()
