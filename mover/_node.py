@@ -21,6 +21,7 @@ from typing import Any, Literal, Protocol
 import zenoh
 
 from . import _deprecated, _keys
+from ._allocator import hold_thresholds
 from ._bridge import Portal, run_blocking, sample_size
 from ._config import NodeConfig, TeamCredentials
 from ._exceptions import ConfigError, MoverError, NameTaken, Unreachable
@@ -161,6 +162,7 @@ class Node:
 
     async def _reach(self) -> zenoh.Session:
         """A zenoh session, once one of the endpoints answers (see the class docstring)."""
+        hold_thresholds()  # before zenoh starts its threads
         loop = asyncio.get_running_loop()
         bound = self.config.patience if self.observer else None
         started = loop.time()
