@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from mover.cli import UsageError
-from robots.explore import EXCHANGES, METHODS, PARTITIONS
+from robots.explore import EXCHANGES, METHODS, NEWS, PARTITIONS
 from sim_hw.grid import MazeFileError, load_maze
 
 from .._common import (
@@ -82,11 +82,12 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     )
     parser.add_argument(
         "--news",
-        choices=("on", "off"),
+        choices=NEWS,
         default="on",
-        help="CU-LVP's agents pass on each other's latest news (default on); off: CU-LVP as"
-        " before 2026-12-04 (no news passed on; helpers neither share a region's work by it"
-        " nor choose their region again)",
+        help="CU-LVP's agents pass on each other's latest news: what changed since their last"
+        " message (default on); whole: all of it in every message (as before 2026-12-04"
+        " 16:00); off: CU-LVP as before 2026-12-04 (no news passed on; helpers neither share"
+        " a region's work by it nor choose their region again)",
     )
     parser.add_argument("--maze", type=Path, default=None, help="run on this maze JSON file")
     add_figure_arguments(parser)
@@ -135,7 +136,7 @@ def settings(args: argparse.Namespace) -> MazeSettings:
         p=tuple(args.p),
         exchanges=args.exchanges,
         partition=args.partition,
-        news=args.news == "on",
+        news=args.news,
         maze=maze,
         maze_path=args.maze,
         out=None if args.no_plots else args.out,
@@ -159,7 +160,7 @@ def run(args: argparse.Namespace) -> int:
         f"runs: {s.runs} (hedac {s.runs_for('hedac')})  "
         + (f"maze: {s.maze_path}" if s.maze_path else f"size: {s.size}  p: {list(s.p)}")
         + f"  exchanges: {s.exchanges}  partition: {s.partition}"
-        + ("" if s.news else "  news: off")
+        + ("" if s.news == "on" else f"  news: {s.news}")
     )
     records = trials(s)
     _report(records, list(s.methods), list(s.agents), s)

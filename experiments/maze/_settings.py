@@ -31,7 +31,7 @@ class MazeSettings:
     p: tuple[float, ...]
     exchanges: int = EXCHANGES
     partition: str = "balanced"  # CU-LVP's regions (robots.explore.PARTITIONS)
-    news: bool = True  # CU-LVP's agents pass on each other's news (robots.explore.make_policy)
+    news: str = "on"  # how CU-LVP's agents pass on each other's news (robots.explore.NEWS)
     maze: Maze | None = None
     maze_path: Path | None = None
     out: Path | None = None

@@ -62,11 +62,11 @@ def run_trial(
     max_rounds: int | None = None,
     exchanges: int = EXCHANGES,
     partition: str = "balanced",
-    news: bool = True,
+    news: str = "on",
 ) -> dict[str, Any]:
     """One seeded exploration run; returns its metrics (section IV-C). ``exchanges`` is the
     number of map exchanges per round (:data:`robots.explore.EXCHANGES`; 1: the paper's);
-    ``partition``, CU-LVP's regions (:data:`robots.explore.PARTITIONS`); ``news``, whether
+    ``partition``, CU-LVP's regions (:data:`robots.explore.PARTITIONS`); ``news``, how
     CU-LVP's agents pass on each other's news (:func:`robots.explore.make_policy`)."""
     world = maze_world(maze, n_agents)
     cells = [world.agent_cell(i) for i in range(n_agents)]
@@ -216,13 +216,17 @@ def one_run(job: Job) -> dict[str, Any]:
 
 def point_file(s: MazeSettings, method: str, agents: int, p: float | None) -> Path:
     """The file of one point's runs under ``s.save``: the method, agent count, maze (size and
-    p, or the maze file's name), exchanges and CU-LVP's plain partition and news switched off
-    name it, so that other settings save apart (CU-LVP's runs before the balanced partition
-    used the file's name without ``-voronoi``, its runs before the news without ``-nonews``)."""
+    p, or the maze file's name), exchanges and CU-LVP's plain partition and news (off, or whole
+    in every message) name it, so that other settings save apart (CU-LVP's runs before the
+    balanced partition used the file's name without ``-voronoi``, its runs before the news
+    without ``-nonews``, its runs with the whole news in every message, before 2026-12-04
+    16:00, without ``-wholenews``)."""
     assert s.save is not None
     where = f"file-{s.maze_path.stem}" if s.maze_path is not None else f"s{s.size}-p{p:g}"
     plain = "-voronoi" if method == "cu-lvp" and s.partition == "voronoi" else ""
-    quiet = "-nonews" if method == "cu-lvp" and not s.news else ""
+    quiet = (
+        {"on": "", "off": "-nonews", "whole": "-wholenews"}[s.news] if method == "cu-lvp" else ""
+    )
     return s.save / f"{method}-n{agents}-{where}-x{s.exchanges}{plain}{quiet}.jsonl"
 
 

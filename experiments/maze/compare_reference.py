@@ -1,9 +1,10 @@
 """CU-LVP against the authors' reference code, paired per maze: ours minus theirs, in rounds.
 
-``python -m experiments.maze.compare_reference OURS REFERENCE [SEEDS]`` prints the table of
-``results/README.md``. OURS holds one ``--save`` directory per seed (``OURS/2026/...``, from
-``python -m experiments.maze --runs 100 --seed 2026 --methods cu-lvp --agents 4,8 --p 0.85,0.15
---no-plots --save OURS/2026``); REFERENCE holds ``ref-s<seed>.jsonl``, one JSON line per run
+``python -m experiments.maze.compare_reference OURS REFERENCE [SEEDS [SUFFIX]]`` prints the
+table of ``results/README.md``. OURS holds one ``--save`` directory per seed (``OURS/2026/...``,
+from ``python -m experiments.maze --runs 100 --seed 2026 --methods cu-lvp --agents 4,8 --p
+0.85,0.15 --no-plots --save OURS/2026``); SUFFIX, the end of our runs' file names for other
+settings (``-wholenews``, ``-nonews``). REFERENCE holds ``ref-s<seed>.jsonl``, one JSON line per run
 (``p``, ``run``, ``agents``, ``rounds``) of the reference code on the same mazes and starts.
 The reference code itself is not in this repository: its authors publish it without a license.
 """
@@ -74,15 +75,15 @@ def _mean_se(d: np.ndarray) -> str:
 
 def main(argv: list[str]) -> int:
     """Print the table; a one-line error for bad arguments."""
-    if len(argv) not in (2, 3):
-        print("usage: python -m experiments.maze.compare_reference OURS REFERENCE [SEEDS]")
+    if len(argv) not in (2, 3, 4):
+        print("usage: python -m experiments.maze.compare_reference OURS REFERENCE [SEEDS [SUFFIX]]")
         return 2
     try:
-        seeds = tuple(int(s) for s in argv[2].split(",")) if len(argv) == 3 else SEEDS
+        seeds = tuple(int(s) for s in argv[2].split(",")) if len(argv) >= 3 else SEEDS
     except ValueError:
         print(f"compare_reference: SEEDS must be a comma list of integers, not {argv[2]!r}")
         return 2
-    print(table(Path(argv[0]), Path(argv[1]), seeds))
+    print(table(Path(argv[0]), Path(argv[1]), seeds, argv[3] if len(argv) == 4 else ""))
     return 0
 
 

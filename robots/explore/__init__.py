@@ -34,22 +34,29 @@ METHODS = {
 
 PARTITIONS = ("balanced", "voronoi")
 """CU-LVP's regions: of about equal size (the default), or the plain Voronoi partition."""
+NEWS = ("on", "whole", "off")
+"""How CU-LVP's agents pass on each other's news (see :func:`make_policy`)."""
 
 
-def make_policy(method: str, partition: str = "balanced", news: bool = True) -> Policy:
+def make_policy(method: str, partition: str = "balanced", news: str = "on") -> Policy:
     """A fresh policy for ``method`` (one of :data:`METHODS`) with the paper's parameters;
     ``partition`` (one of :data:`PARTITIONS`) sets CU-LVP's regions (the baselines': plain).
-    ``news=False``: CU-LVP as before its agents passed on each other's news (none passed on,
-    helpers neither share a region's work by it nor choose their region again)."""
+    ``news`` (one of :data:`NEWS`), how CU-LVP's agents pass on each other's news: ``"on"``
+    what changed since the agent's last message (all of it to a newcomer), ``"whole"`` all of
+    it in every message (as before 2026-12-04 16:00), ``"off"`` none (and helpers neither share
+    a region's work by it nor choose their region again: CU-LVP before 2026-12-04)."""
     if partition not in PARTITIONS:
         raise ValueError(f"unknown partition {partition!r}; choose from {', '.join(PARTITIONS)}")
+    if news not in NEWS:
+        raise ValueError(f"unknown news {news!r}; choose from {', '.join(NEWS)}")
     try:
         policy = METHODS[method]()
     except KeyError:
         raise ValueError(f"unknown method {method!r}; choose from {', '.join(METHODS)}") from None
     if isinstance(policy, CULVP):
         policy.partition = partition
-        if not news:
+        policy.news_whole = news == "whole"
+        if news == "off":
             policy.news_rounds = policy.reconsider_every = 0
             policy.help_share = 0.0
     return policy  # type: ignore[no-any-return]
@@ -61,7 +68,7 @@ def make_team(
     starts: list[tuple[int, int]],
     seed: int | np.random.SeedSequence,
     partition: str = "balanced",
-    news: bool = True,
+    news: str = "on",
 ) -> list[ExplorerAgent]:
     """One agent per start cell, each with its own policy (``make_policy``) and an independent
     seeded stream."""
@@ -84,6 +91,7 @@ __all__ = [
     "EXCHANGES",
     "FREE",
     "METHODS",
+    "NEWS",
     "OBSTACLE",
     "PARTITIONS",
     "STAY",

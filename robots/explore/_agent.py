@@ -89,10 +89,12 @@ class ExplorerAgent:
         # agent -> (round, cell, regions): the latest news of each agent, heard or passed on;
         # CU-LVP passes it on in its messages (``news_rounds``), the baselines do not
         self.gossip = getattr(policy, "news_rounds", 0) > 0
+        self._whole_news: bool = getattr(policy, "news_whole", False)
         # each other agent lately known to hold a region takes this share of one's part of
         # it (``switch_region``; CU-LVP's ``help_share``)
         self._help_share: float = getattr(policy, "help_share", 0.0)
         self._news: dict[int, tuple[int, int, tuple[int, ...]]] = {}
+        self._news_fresh: set[int] = set()  # agents whose news changed since our last message
         self._reconsidered = 0  # round a helper last chose its region again (``reconsider``)
         self._share: np.ndarray | None = None  # ``_share_of_region`` until the map, the
         # agent's cell, its regions or the agents heard change
@@ -171,6 +173,7 @@ class ExplorerAgent:
             )
             peers[sender] = peer
             self._news[sender] = (self._round, peer.pos, tuple(sorted(peer_regions)))
+            self._news_fresh.add(sender)
             for r in peer_regions:
                 self._last_heard[r] = self._round
             for r, holders in self._holders.items():
@@ -205,6 +208,7 @@ class ExplorerAgent:
             if aid == self.id or self._news.get(aid, (-1,))[0] >= rnd:
                 continue
             self._news[aid] = (rnd, pos, tuple(regions))
+            self._news_fresh.add(aid)
             for r in regions:
                 self._last_heard[r] = max(self._last_heard[r], rnd)
             for r, holders in self._holders.items():
@@ -213,21 +217,31 @@ class ExplorerAgent:
             for r in regions:
                 self._holders.setdefault(r, {})[aid] = pos
 
-    def _gossip(self) -> list[list[Any]]:
-        """The news this agent passes on: every other agent's latest (``gossip``, CU-LVP's)."""
+    def _gossip(self, everything: bool) -> list[list[Any]]:
+        """The news this agent passes on (``gossip``, CU-LVP's): each other agent's latest that
+        changed since its last message, or with ``everything`` (a newcomer was heard, or
+        ``news_whole``) all of it. A hearer keeps only news newer than its own, so the agents
+        that heard the last message lose nothing by the difference."""
+        fresh, self._news_fresh = self._news_fresh, set()
         if not self.gossip:
             return []
-        return [[aid, rnd, pos, list(regions)] for aid, (rnd, pos, regions) in self._news.items()]
+        everything = everything or self._whole_news
+        return [
+            [aid, rnd, pos, list(regions)]
+            for aid, (rnd, pos, regions) in self._news.items()
+            if everything or aid in fresh
+        ]
 
     def _cells(self) -> dict[str, Any]:
         """The map cells learned since the last message (all of them for a newcomer)."""
-        mask = (self._flat != UNKNOWN) & ~self._border.ravel() if self._send_full else self._fresh
+        everything = self._send_full
+        mask = (self._flat != UNKNOWN) & ~self._border.ravel() if everything else self._fresh
         self._send_full = False
         free = np.flatnonzero(mask & (self._flat == FREE)).astype(self._dtype)
         obstacle = np.flatnonzero(mask & (self._flat == OBSTACLE)).astype(self._dtype)
         self._fresh[:] = False
         out = {"id": self.id, "free": free.tobytes(), "obstacle": obstacle.tobytes()}
-        news = self._gossip()
+        news = self._gossip(everything)
         if news:
             out["news"] = news
         return out

@@ -195,8 +195,9 @@ class CULVP(FrontierPolicy):
 
     Beyond the paper, u_mnm also counts the agents not in range whose news is at most
     ``news_rounds`` rounds old, at the cell they were then: every message passes on the
-    sender's latest news of each agent (round, cell, regions; ``ExplorerAgent._merge_news``),
-    so an agent also steers away from agents its neighbours heard lately.
+    sender's latest news of each agent (round, cell, regions; ``ExplorerAgent._merge_news``)
+    that changed since its last message (all of it to a newcomer; ``news_whole``: all of it in
+    every message), so an agent also steers away from agents its neighbours heard lately.
     """
 
     name = "cu-lvp"
@@ -205,6 +206,7 @@ class CULVP(FrontierPolicy):
     news_rounds = 10  # agents out of range counted in u_mnm while their news is this fresh
     reconsider_every = 3  # a helper chooses its region again this often (rounds; 0: never)
     help_share = 0.5  # each other agent lately known to hold a region takes this share of it
+    news_whole = False  # True: every message passes on all the news (not what changed)
 
     def __init__(self, lam: float = 0.2, reach: int = 2) -> None:
         self.lam = lam

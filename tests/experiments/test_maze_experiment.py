@@ -153,7 +153,7 @@ def test_news_off_makes_the_stored_cu_lvp_runs_again(tmp_path: Path) -> None:
     argv = ("--seed", "2026", "--agents", "1,2,4,6,8,10,15,20", "--methods", "cu-lvp")
     old = settings(_parse(*argv, "--partition", "voronoi", "--news", "off", "--no-plots"))
     new = settings(_parse(*argv, "--no-plots"))
-    assert (old.news, new.news) == (False, True)
+    assert (old.news, new.news) == ("off", "on")
     old_save = settings(_parse("--news", "off", "--save", str(tmp_path), "--no-plots"))
     assert point_file(old_save, "cu-lvp", 8, 0.85).name == "cu-lvp-n8-s30-p0.85-x3-nonews.jsonl"
     assert point_file(old_save, "nf", 8, 0.85).name == "nf-n8-s30-p0.85-x3.jsonl"
@@ -165,6 +165,27 @@ def test_news_off_makes_the_stored_cu_lvp_runs_again(tmp_path: Path) -> None:
             k: v for k, v in want.items() if k not in clock
         }
         assert one_run((new, want["p"], 0, want["agents"], "cu-lvp"))["rounds"] > 0
+
+
+def test_news_whole_makes_the_stored_runs_of_the_whole_news_again(tmp_path: Path) -> None:
+    """``--news whole`` is CU-LVP as ``results/maze/v2/runs_cu-lvp_wholenews.txt`` stored it (every
+    message passing on all the news, before only what changed was): its runs are made again,
+    every figure but the wall-clock ones, and saved apart."""
+    from experiments.maze import settings
+    from experiments.maze._trial import one_run, point_file
+
+    stored = RESULTS / "maze" / "v2" / "runs_cu-lvp_wholenews.txt"
+    runs = json.loads(stored.read_text().splitlines()[-1])["runs"]
+    argv = ("--seed", "2026", "--agents", "1,2,4,6,8,10,15,20", "--methods", "cu-lvp")
+    whole = settings(_parse(*argv, "--news", "whole", "--no-plots"))
+    saved = settings(_parse("--news", "whole", "--save", str(tmp_path), "--no-plots"))
+    assert point_file(saved, "cu-lvp", 8, 0.85).name == "cu-lvp-n8-s30-p0.85-x3-wholenews.jsonl"
+    clock = {"step_ms", "time_s"}
+    for want in [r for r in runs if r["run"] == 0 and r["agents"] in (4, 8)]:
+        made = one_run((whole, want["p"], 0, want["agents"], "cu-lvp"))
+        assert {k: v for k, v in made.items() if k not in clock | {"seed"}} == {
+            k: v for k, v in want.items() if k not in clock | {"seed"}
+        }
 
 
 def test_compare_reference_pairs_runs_per_maze(tmp_path: Path) -> None:

@@ -234,6 +234,31 @@ def test_relays_carry_news_along_a_chain_in_one_round() -> None:
     assert all(m["free"] == b"" for m in (x.relay_message() for x in _chain(3)[::2]))
 
 
+def test_a_message_passes_on_the_news_that_changed_and_all_of_it_to_a_newcomer() -> None:
+    starts = [(1, 1), (1, 4), (1, 7)]
+    # the agents in range of each other, round by round: all three; a0 away, twice; a0 back
+    # and a2 away
+    rounds = [[0, 1, 2], [1, 2], [1, 2], [0, 1]]
+
+    def passed_on(news: str) -> list[list[int]]:
+        """The agents whose news a1's message passes on, each round and after the last."""
+        team = make_team("cu-lvp", (9, 9), starts, 3, news=news)
+        passed = []
+        for group in [*rounds, []]:
+            out = [_wire(a.outgoing_message()) for a in team]
+            passed.append(sorted(e[0] for e in out[1].get("news", [])))
+            for i, a in enumerate(team):
+                a.observe(heard_messages=[out[j] for j in group if j != i] if i in group else [])
+        return passed
+
+    # what a1 heard in the round before (its news of a0 stops changing once a0 is away, and
+    # is not passed on again); after the last round, a0 is a newcomer to a1: all of it, a2's
+    # unchanged news included
+    assert passed_on("on") == [[], [0, 2], [2], [2], [0, 2]]
+    assert passed_on("whole") == [[], [0, 2], [0, 2], [0, 2], [0, 2]]
+    assert passed_on("off") == [[]] * 5
+
+
 def test_agents_sharing_a_region_split_it() -> None:
     grid = np.ones((3, 25), dtype=np.int8)
     grid[1, 1:-1] = 0
