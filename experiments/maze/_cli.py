@@ -86,7 +86,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         default="on",
         help="CU-LVP's agents pass on each other's latest news: what changed since their last"
         " message (default on); whole: all of it in every message (as before 2026-12-04"
-        " 16:00); off: CU-LVP as before 2026-12-04 (no news passed on; helpers neither share"
+        " 15:30 UTC); off: CU-LVP as before 2026-12-04 (no news passed on; helpers neither share"
         " a region's work by it nor choose their region again)",
     )
     parser.add_argument("--maze", type=Path, default=None, help="run on this maze JSON file")

@@ -220,7 +220,7 @@ def point_file(s: MazeSettings, method: str, agents: int, p: float | None) -> Pa
     in every message) name it, so that other settings save apart (CU-LVP's runs before the
     balanced partition used the file's name without ``-voronoi``, its runs before the news
     without ``-nonews``, its runs with the whole news in every message, before 2026-12-04
-    16:00, without ``-wholenews``)."""
+    15:30 UTC, without ``-wholenews``)."""
     assert s.save is not None
     where = f"file-{s.maze_path.stem}" if s.maze_path is not None else f"s{s.size}-p{p:g}"
     plain = "-voronoi" if method == "cu-lvp" and s.partition == "voronoi" else ""

@@ -43,8 +43,8 @@ def make_policy(method: str, partition: str = "balanced", news: str = "on") -> P
     ``partition`` (one of :data:`PARTITIONS`) sets CU-LVP's regions (the baselines': plain).
     ``news`` (one of :data:`NEWS`), how CU-LVP's agents pass on each other's news: ``"on"``
     what changed since the agent's last message (all of it to a newcomer), ``"whole"`` all of
-    it in every message (as before 2026-12-04 16:00), ``"off"`` none (and helpers neither share
-    a region's work by it nor choose their region again: CU-LVP before 2026-12-04)."""
+    it in every message (as before 2026-12-04 15:30 UTC), ``"off"`` none (and helpers neither
+    share a region's work by it nor choose their region again: CU-LVP before 2026-12-04)."""
     if partition not in PARTITIONS:
         raise ValueError(f"unknown partition {partition!r}; choose from {', '.join(PARTITIONS)}")
     if news not in NEWS:
