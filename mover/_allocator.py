@@ -8,8 +8,9 @@ calls and the allocator"). Fixed thresholds, set once before zenoh starts its th
 blocks up to :data:`MMAP_THRESHOLD` in the heaps and free memory up to :data:`TRIM_THRESHOLD`
 mapped: a large call then costs what it costs the first time, whatever came before.
 
-``MOVER_ALLOCATOR=default`` leaves glibc as it is, as does any ``MALLOC_*_`` tunable in the
-environment (the user's choice wins); other C libraries are left alone.
+``MOVER_ALLOCATOR=default`` leaves glibc as it is (``held``, or unset: the thresholds held; any
+other value is logged and held), as does any ``MALLOC_*_`` tunable in the environment (the
+user's choice wins); other C libraries are left alone.
 """
 
 from __future__ import annotations
@@ -41,8 +42,11 @@ def hold_thresholds() -> bool:
 
 
 def _hold() -> bool:
-    if os.environ.get("MOVER_ALLOCATOR", "").strip().lower() == "default":
+    choice = os.environ.get("MOVER_ALLOCATOR", "").strip().lower()
+    if choice == "default":
         return False
+    if choice not in ("", "held"):
+        log.warning("MOVER_ALLOCATOR=%r is not 'default' or 'held': holding the thresholds", choice)
     if not sys.platform.startswith("linux") or any(k in os.environ for k in USERS_TUNABLES):
         return False
     import ctypes  # (only here: a process that never opens a node does not load it)

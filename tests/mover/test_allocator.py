@@ -58,6 +58,13 @@ def test_the_thresholds_are_held_unless_the_user_chose() -> None:
     assert _run(code) == ["True", "True"]
     assert _run(code, MOVER_ALLOCATOR="default") == ["False", "False"]
     assert _run(code, MALLOC_TRIM_THRESHOLD_="1048576") == ["False", "False"]
+    out = subprocess.run(
+        [sys.executable, "-c", code], env={**os.environ, "MOVER_ALLOCATOR": "defualt"}, cwd=ROOT,
+        capture_output=True, text=True, check=True, timeout=60,
+    )  # fmt: skip
+    assert out.stdout.split() == ["True", "True"]  # a typo is said, once, and held
+    assert out.stderr.count("MOVER_ALLOCATOR='defualt' is not 'default' or 'held'") == 1
+    assert "Traceback" not in out.stderr
 
 
 def test_large_blocks_after_a_freed_mapped_one_fault_in_no_fresh_pages() -> None:
