@@ -45,12 +45,15 @@ asyncio.run(main())
 
 
 def _run(code: str, **env: str) -> list[str]:
+    return _process(code, **env).stdout.split()
+
+
+def _process(code: str, **env: str) -> subprocess.CompletedProcess[str]:
     clean = {k: v for k, v in os.environ.items() if not k.startswith(("MALLOC_", "MOVER_ALLOC"))}
-    out = subprocess.run(
+    return subprocess.run(
         [sys.executable, "-c", code], env={**clean, **env}, cwd=ROOT,
         capture_output=True, text=True, check=True, timeout=60,
     )  # fmt: skip
-    return out.stdout.split()
 
 
 def test_the_thresholds_are_held_unless_the_user_chose() -> None:
@@ -58,10 +61,7 @@ def test_the_thresholds_are_held_unless_the_user_chose() -> None:
     assert _run(code) == ["True", "True"]
     assert _run(code, MOVER_ALLOCATOR="default") == ["False", "False"]
     assert _run(code, MALLOC_TRIM_THRESHOLD_="1048576") == ["False", "False"]
-    out = subprocess.run(
-        [sys.executable, "-c", code], env={**os.environ, "MOVER_ALLOCATOR": "defualt"}, cwd=ROOT,
-        capture_output=True, text=True, check=True, timeout=60,
-    )  # fmt: skip
+    out = _process(code, MOVER_ALLOCATOR="defualt")
     assert out.stdout.split() == ["True", "True"]  # a typo is said, once, and held
     assert out.stderr.count("MOVER_ALLOCATOR='defualt' is not 'default' or 'held'") == 1
     assert "Traceback" not in out.stderr
