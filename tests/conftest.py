@@ -14,6 +14,7 @@ replaces every way a process is born in CPython: ``fork_exec`` (as ``subprocess`
 from __future__ import annotations
 
 import _posixsubprocess
+import contextlib
 import os
 import subprocess
 from collections.abc import Callable, Generator, Iterator
@@ -26,6 +27,15 @@ import pytest
 # and stopped members are about what happens once a member is lost, not about waiting for it.
 # tests/netlab sets the patience it measures with on the processes it starts.
 os.environ.setdefault("MOVER_PATIENCE", "1")
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    """matplotlib builds its font cache on first use by running ``fc-list`` (where fontconfig is
+    installed): built here, before any guard, so that whether an unmarked test that plots
+    passes does not depend on whether a marked test plotted before it."""
+    with contextlib.suppress(ImportError):  # without the plotting extra nothing plots
+        import matplotlib.font_manager  # noqa: F401
+
 
 PROCESSES = "processes"
 """The mark of a module whose tests start processes (declared in pyproject.toml)."""
