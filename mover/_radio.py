@@ -133,6 +133,8 @@ class Subscription:
 
     async def get(self, timeout: float | None = None) -> Message:
         """The next message; TimeoutError after ``timeout`` s, StopAsyncIteration if closed."""
+        if self._items:  # one waits: no timer, no context (a tick's frame is often here)
+            return self._items.popleft()
         async with asyncio.timeout(timeout):
             while not self._items:
                 if self._closed:
