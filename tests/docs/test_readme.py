@@ -80,6 +80,8 @@ COMMANDS: dict[str, Here | Elsewhere | Checked] = {
     ".venv/bin/python bench/rpc.py": Here("usage: rpc.py", after=("--help",)),
     ".venv/bin/python bench/collectives.py": Here("usage: collectives.py", after=("--help",)),
     ".venv/bin/python bench/sim.py": Here("usage: sim.py", after=("--help",)),
+    ".venv/bin/python bench/floors.py": Here("usage: floors.py", after=("--help",)),
+    ".venv/bin/python bench/radio.py": Here("usage: radio.py", after=("--help",)),
     ".venv/bin/python bench/team.py": Elsewhere(
         "tests/mover/test_load.py::test_ten_members_under_call_load_lose_no_reply_and_see_no_flap"
     ),
