@@ -111,6 +111,7 @@ class World:
         self.floor = _devices.Floor(spec.size[0], spec.size[1], spec.cell)
         for i, j, value, colour in spec.floor:
             self.floor.set(i, j, value, colour)
+        self._contacts = _devices.Contacts()  # every body's contacts, read once a tick
         # what a sonar ray may hit besides robots (asked of chipmunk: see _sonar)
         self._others = [
             sh
@@ -258,9 +259,10 @@ class World:
     def _measure_all(self, robots: list[_Robot]) -> None:
         """Every robot's readings after a tick: the sonar of all of them in one batch once
         there are BATCH_FROM robots (below that, a query per ray is quicker; both read alike)."""
+        normals = self._contacts.read(self.space)
         if len(robots) < BATCH_FROM:
             for robot in robots:
-                robot.readings = self._measure(robot)
+                robot.readings = self._measure(robot, normals)
             return
         poses = [_pose(r.parts.body) for r in robots]
         sonars: list[Sonar] = []
@@ -278,7 +280,8 @@ class World:
         )
         ranges = iter(sonar_batch(self.space, discs, sonars, self._others))
         for robot, pose in zip(robots, poses, strict=True):
-            robot.readings = self._readings(robot, pose, next(ranges) if robot.sonar else None)
+            ranged = next(ranges) if robot.sonar else None
+            robot.readings = self._readings(robot, pose, ranged, normals)
 
     def _hear_marks(self, robots: list[_Robot]) -> None:
         """Markable markers take the ``mark:<id>`` LED messages of robots within ``hears``."""
@@ -299,8 +302,13 @@ class World:
         )
         robot.last = pose
 
-    def _measure(self, robot: _Robot) -> Readings:
-        """One robot's readings now (a robot just placed), its sonar a query per ray."""
+    def _measure(
+        self, robot: _Robot, normals: dict[int, list[tuple[float, float]]] | None = None
+    ) -> Readings:
+        """One robot's readings now (a robot just placed), its sonar a query per ray;
+        ``normals``: every body's contacts (see ``_devices.Contacts``), read now if not given."""
+        if normals is None:
+            normals = self._contacts.read(self.space)
         spec = robot.parts.spec
         pose = _pose(robot.parts.body)
         self._odometry(robot, pose)
@@ -319,12 +327,17 @@ class World:
             if sonar
             else None
         )
-        return self._readings(robot, pose, ranges)
+        return self._readings(robot, pose, ranges, normals)
 
     def _readings(
-        self, robot: _Robot, pose: tuple[float, float, float], ranges: list[float] | None
+        self,
+        robot: _Robot,
+        pose: tuple[float, float, float],
+        ranges: list[float] | None,
+        normals: dict[int, list[tuple[float, float]]],
     ) -> Readings:
         spec = robot.parts.spec
+        body = robot.parts.body
         cam = spec.camera
         sightings = (
             _devices.camera_sightings(
@@ -343,7 +356,7 @@ class World:
             "tick": self.tick,
             "t": self.time,
             "sonar": ranges,
-            "bump": _devices.bumper_side(robot.parts.body),
+            "bump": _devices.bumper_side(normals.get(body.id), _lib.cpBodyGetAngle(body._body)),
             "odom": list(robot.odom),
             "cam": sightings,
             "loc": list(pose) if spec.radio else None,

@@ -1,4 +1,6 @@
-"""The batched sonar (``sim_hw.continuous._sonar``) reads what a query per ray read, bit for bit."""
+"""The batched sensing reads what the per-robot queries read, bit for bit: the sonar
+(``sim_hw.continuous._sonar``) what a query per ray read, the bumper (``_devices.Contacts``) what
+each robot's ``Body.each_arbiter`` read."""
 
 from __future__ import annotations
 
@@ -9,7 +11,7 @@ import pymunk
 import pytest
 
 from sim_hw import BoxSpec, ObstacleSpec, RobotSpec, SonarSpec, World, WorldSpec
-from sim_hw.continuous import _world
+from sim_hw.continuous import _devices, _world
 from sim_hw.continuous._bodies import CAT_QUERY, SOLID
 
 
@@ -89,3 +91,44 @@ def test_the_batch_reads_what_a_query_per_ray_read(
             assert ranges == reference[rid], rid
             hits += sum(r < batched.robots[rid].parts.spec.sonar.max_range for r in ranges)  # type: ignore[union-attr]
     assert hits > 500  # the scene is a crowd: most rays hit something
+
+
+def slow_bumper(body: pymunk.Body) -> str | None:
+    """The bumper as it was read before the batch: the body's own arbiters, one at a time."""
+    bearings: list[float] = []
+
+    def visit(arb: pymunk.Arbiter) -> None:
+        n = arb.normal
+        sign = 1.0 if arb.bodies[0] is body else -1.0
+        bearings.append(_devices.wrap(math.atan2(sign * n.y, sign * n.x) - body.angle))
+
+    body.each_arbiter(visit)
+    if not bearings:
+        return None
+    bearing = min(bearings, key=abs)
+    if abs(bearing) <= math.pi / 4:
+        return "front"
+    if abs(bearing) >= 3 * math.pi / 4:
+        return "back"
+    return "left" if bearing > 0 else "right"
+
+
+@pytest.mark.parametrize("batched", [False, True])
+def test_the_bumper_reads_what_each_robots_arbiters_read(
+    batched: bool, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    if batched:
+        monkeypatch.setattr(_world, "BATCH_FROM", 1)
+    world = _scene(4, 0.0)
+    rng = np.random.default_rng(4)
+    sides: dict[str | None, int] = {}
+    for _ in range(40):
+        for robot in world.robots.values():  # turning at random: contacts begin and end
+            robot.v, robot.w = 0.4, float(rng.uniform(-3.0, 3.0))
+        world.step()
+        for rid, robot in world.robots.items():
+            side = robot.readings["bump"]
+            assert side == slow_bumper(robot.parts.body), rid
+            sides[side] = sides.get(side, 0) + 1
+    assert set(sides) == {None, "front", "left", "right", "back"}  # every side was read
+    assert sum(v for k, v in sides.items() if k) > 500  # a crowd: many contacts
