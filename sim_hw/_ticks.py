@@ -11,7 +11,7 @@ import contextlib
 import math
 from collections.abc import AsyncIterator, Callable
 
-from mover._futures import failure
+from mover._futures import failure, shielded
 from robots.hal import HardwareLost, LostLatch
 
 from ._link import DoorLink, WorldLink
@@ -104,7 +104,7 @@ class Ticks(LostLatch):
             task = self._begin(make)
             if task.done():  # this command completed the tick: still give others a turn
                 await asyncio.sleep(0)
-        await asyncio.shield(task)  # (which also takes a failure's exception as seen)
+        await shielded(task)  # (which also takes a failure's exception as seen)
         self._take(task)
 
     def _begin(self, make: Callable[[], Command]) -> asyncio.Future[Readings]:
