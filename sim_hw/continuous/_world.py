@@ -21,7 +21,7 @@ from pymunk._chipmunk import lib as _lib
 
 from robots.hal import MARK, MARKED
 
-from . import _bodies, _devices
+from . import _bodies, _devices, _drive
 from ._contract import DT, STEPS_PER_TICK, TICK, Command, Readings
 from ._sonar import Discs, Sonar, sonar_batch
 from ._spec import RobotSpec, WorldSpec
@@ -112,6 +112,7 @@ class World:
         for i, j, value, colour in spec.floor:
             self.floor.set(i, j, value, colour)
         self._contacts = _devices.Contacts()  # every body's contacts, read once a tick
+        self._driver = _drive.Driver(space)
         # what a sonar ray may hit besides robots (asked of chipmunk: see _sonar)
         self._others = [
             sh
@@ -237,19 +238,10 @@ class World:
     def step(self) -> None:
         """Advance one control tick and measure every robot's readings."""
         robots = list(self.robots.values())
-        # chipmunk's setters directly: the property setters cost ~2 µs a robot a step
-        drives = [(r.parts.body._body, r.parts.control._body, r.v, r.w) for r in robots]
-        get_angle, set_vel, set_ang = (
-            _lib.cpBodyGetAngle,
-            _lib.cpBodySetVelocity,
-            (_lib.cpBodySetAngularVelocity),
-        )
-        cos, sin = math.cos, math.sin
+        drives = [(r.parts.body, r.parts.control, r.v, r.w) for r in robots]
+        drive = self._driver.tick(drives)
         for _ in range(STEPS_PER_TICK):
-            for body, control, v, w in drives:
-                a = get_angle(body)
-                set_vel(control, (v * cos(a), v * sin(a)))
-                set_ang(control, w)
+            drive()
             self.space.step(DT)
         self.tick += 1
         if self._markable:
