@@ -1,16 +1,18 @@
-"""Every robot's sonar in one batch: numpy over a spatial hash for the robots' discs, chipmunk
-only for the rays that may reach anything else.
+"""Every robot's sonar in one batch: numpy over a spatial hash for the robots' discs near each
+sonar, chipmunk for the rays that hit none of them and for the rays that may reach anything else.
 
 The readings are those of one ``cpSpaceSegmentQueryFirst`` per ray (``_devices.sonar_ranges``,
 kept as the reference), bit for bit: a ray's range is its first hit's ``alpha`` times the
 range, and the first hit is the least ``alpha`` over the shapes it meets, so the least over the
-robots' discs (computed here with chipmunk's own circle query, operation for operation) and
-over the other solid shapes (asked of chipmunk, for the rays whose box touches one) is the same
-number. Noise is drawn from each robot's generator in ray order, as the reference does.
+robots' discs within NEAR (computed here with chipmunk's own circle query, operation for
+operation) and over the other solid shapes (asked of chipmunk, for the rays whose box touches
+one) is the same number when a disc that near was hit; a ray that hit none (an open ray) is
+asked of chipmunk whole, as the reference asks it. Noise is drawn from each robot's generator
+in ray order, as the reference does.
 
-Why: one chipmunk query costs ~1 µs through cffi, 8 rays a robot 8 ms a tick at 1000 robots;
-here the cost is a few numpy passes over the rays and the robot pairs within sonar reach
-(docs/physics.md gives the figures).
+Why: one chipmunk query costs ~1.5-2.5 µs through cffi, 8 rays a robot 12-20 ms a tick at 1000
+robots; here most rays of a crowd end at a disc within NEAR, found by a few numpy passes over
+the rays and the robot pairs that near (docs/physics.md gives the figures).
 """
 
 from __future__ import annotations
@@ -131,10 +133,10 @@ def sonar_batch(
     reach = reach_s[owner_s]
     alpha = np.ones(len(owner))
     spread = np.fromiter((so.spread for so in sonars), float, len(sonars))
-    _discs_first(
-        alpha, discs, index, counts, spread, _Rays(owner, c, s, ax, ay, bx, by, far, reach)
-    )
-    _others_first(alpha, space, others, sonars, owner_s, ax, ay, bx, by)
+    rays = _Rays(owner, c, s, ax, ay, bx, by, far, reach)
+    open_ = _discs_near(alpha, discs, index, counts, spread, rays)
+    _whole(alpha, space, sonars, owner_s, rays, open_)
+    _others_first(alpha, space, others, sonars, owner_s, rays, ~open_)
     hits = alpha < 1.0
     ranges = np.where(hits, alpha * reach, reach)  # no hit: the range itself
     noisy_ones = np.fromiter((so.noise > 0.0 for so in sonars), bool, len(sonars))
@@ -182,29 +184,48 @@ def _pairs(discs: Discs, index: np.ndarray, bound: np.ndarray) -> tuple[np.ndarr
     return k[keep], j[keep]
 
 
-def _discs_first(
+def _discs_near(
     alpha: np.ndarray,
     discs: Discs,
     index: np.ndarray,
     counts: np.ndarray,
     spread: np.ndarray,
     rays: _Rays,
-) -> None:
-    """Lower ``alpha`` to each ray's first hit on a robot's disc (chipmunk's circle query):
-    first against the discs within NEAR of each sonar, then, for the rays that hit none of
-    them that near, against every disc within reach (a disc farther than NEAR cannot be hit
-    nearer than NEAR along a ray from the centre)."""
+) -> np.ndarray:
+    """Lower ``alpha`` to each ray's first hit on a robot's disc within NEAR of its sonar
+    (chipmunk's circle query); return the rays still open: those whose sonar reaches past NEAR
+    and that hit no disc that near (a disc farther than NEAR cannot be hit nearer than NEAR
+    along a ray from the centre)."""
     first_ray = np.cumsum(counts) - counts
     far = np.maximum.reduceat(rays.far, first_ray)
     near = np.minimum(far, NEAR)
-    _pass(alpha, discs, index, counts, spread, first_ray, near, rays, None)
+    _pass(alpha, discs, index, counts, spread, first_ray, near, rays)
     reached = discs.radius[rays.owner] + alpha * rays.reach  # hit distance from the centre
-    open_ = ~((alpha < 1.0) & (reached <= NEAR - _SLACK))
+    open_: np.ndarray = ~((alpha < 1.0) & (reached <= NEAR - _SLACK))
     open_ &= np.repeat(far > NEAR, counts)
-    if not open_.any():
-        return
-    sub = np.flatnonzero(np.add.reduceat(open_, first_ray) > 0)
-    _pass(alpha, discs, index[sub], counts[sub], spread[sub], first_ray[sub], far[sub], rays, open_)
+    return open_
+
+
+def _whole(
+    alpha: np.ndarray,
+    space: pymunk.Space,
+    sonars: Sequence[Sonar],
+    owner_s: np.ndarray,
+    rays: _Rays,
+    only: np.ndarray,
+) -> None:
+    """Set ``alpha`` of the rays ``only`` to their first hit on any solid shape, asked of
+    chipmunk as the reference asks it (in a crowd a quarter to a half of the rays; numpy over
+    every disc within their reach cost more than these queries from ~200 robots on)."""
+    cspace, info, null = space._space, _INFO, _ffi.NULL
+    query = _lib.cpSpaceSegmentQueryFirst
+    rows = np.flatnonzero(only)
+    starts = zip(rays.ax[rows].tolist(), rays.ay[rows].tolist(), strict=True)
+    ends = zip(rays.bx[rows].tolist(), rays.by[rows].tolist(), strict=True)
+    groups = [sonars[k].group for k in owner_s[rows].tolist()]
+    for i, start, end, group in zip(rows.tolist(), starts, ends, groups, strict=True):
+        hit = query(cspace, start, end, 0.0, (group, CAT_QUERY, SOLID), info) != null
+        alpha[i] = info.alpha if hit else 1.0
 
 
 def _pass(
@@ -216,10 +237,9 @@ def _pass(
     first_ray: np.ndarray,
     bound: np.ndarray,
     rays: _Rays,
-    only: np.ndarray | None,
 ) -> None:
-    """Lower ``alpha`` of the rays of sonars ``index`` (``only`` those, if given) to their
-    first hit on the discs within ``bound`` of each."""
+    """Lower ``alpha`` of the rays of sonars ``index`` to their first hit on the discs within
+    ``bound`` of each."""
     k, j = _pairs(discs, index, bound)
     if not len(k):
         return
@@ -244,9 +264,6 @@ def _pass(
     nth = np.arange(total) - np.repeat(np.cumsum(per) - per, per)
     ray = np.repeat(first_ray[k], per) + (np.repeat(lo, per) + nth) % np.repeat(n, per)
     j = np.repeat(j, per)
-    if only is not None:
-        keep = only[ray]
-        ray, j = ray[keep], j[keep]
     cx, cy, r = discs.x[j], discs.y[j], discs.radius[j]
     owner = rays.owner[ray]
     dx, dy = cx - discs.x[owner], cy - discs.y[owner]
@@ -282,15 +299,14 @@ def _others_first(
     others: Sequence[pymunk.Shape],
     sonars: Sequence[Sonar],
     owner_s: np.ndarray,
-    ax: np.ndarray,
-    ay: np.ndarray,
-    bx: np.ndarray,
-    by: np.ndarray,
+    rays: _Rays,
+    only: np.ndarray,
 ) -> None:
-    """Lower ``alpha`` to each ray's first hit on any other solid shape, asked of chipmunk for
-    the rays whose bounding box touches one's."""
+    """Lower ``alpha`` of the rays ``only`` to their first hit on any other solid shape, asked
+    of chipmunk for the rays whose bounding box touches one's."""
     if not others:
         return
+    ax, ay, bx, by = rays.ax, rays.ay, rays.bx, rays.by
     # a shape hit nearer than the disc hit (if any) touches the box of the ray up to it
     ex, ey = ax + (bx - ax) * alpha, ay + (by - ay) * alpha
     lox, hix = np.minimum(ax, ex) - _SLACK, np.maximum(ax, ex) + _SLACK
@@ -301,7 +317,7 @@ def _others_first(
         near |= (lox <= bb.right) & (hix >= bb.left) & (loy <= bb.top) & (hiy >= bb.bottom)
     cspace, info, null = space._space, _INFO, _ffi.NULL
     query = _lib.cpSpaceSegmentQueryFirst
-    for i in np.flatnonzero(near).tolist():
+    for i in np.flatnonzero(near & only).tolist():
         group = sonars[int(owner_s[i])].group
         start, end = (float(ax[i]), float(ay[i])), (float(bx[i]), float(by[i]))
         hit = query(cspace, start, end, 0.0, (group, CAT_QUERY, _OTHERS), info) != null
