@@ -15,7 +15,7 @@ import asyncio
 import contextlib
 import logging
 import math
-from collections.abc import AsyncIterator, Mapping
+from collections.abc import AsyncIterator, Coroutine, Mapping
 from typing import TYPE_CHECKING, Any
 
 from robots.hal import (
@@ -86,9 +86,11 @@ class SimHardware(TickedRobot):
         """Simulated time of the last readings."""
         return self._ticks.now()
 
-    async def tick(self) -> None:
-        """Send this tick's command, wait for the next readings (shared by concurrent callers)."""
-        await self._ticks.tick(self._command)
+    def tick(self) -> Coroutine[Any, Any, None]:
+        """Send this tick's command, wait for the next readings (shared by concurrent callers).
+
+        (The clock's coroutine itself, not one awaiting it: a frame less a robot a tick.)"""
+        return self._ticks.tick(self._command)
 
     def _command(self) -> Command:
         command: Command = {"v": self._v, "w": self._w, "push": self._push}
