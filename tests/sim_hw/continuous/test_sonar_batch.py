@@ -11,7 +11,7 @@ import pymunk
 import pytest
 
 from sim_hw import BoxSpec, ObstacleSpec, RobotSpec, SonarSpec, World, WorldSpec
-from sim_hw.continuous import _devices, _world
+from sim_hw.continuous import _devices, _sonar, _world
 from sim_hw.continuous._bodies import CAT_QUERY, SOLID
 
 
@@ -67,12 +67,15 @@ def _scene(seed: int, noise: float) -> World:
     return world
 
 
+@pytest.mark.parametrize("far", ["queries", "numpy"])
 @pytest.mark.parametrize("noise", [0.0, 0.02])
 @pytest.mark.parametrize("seed", [1, 2, 3])
 def test_the_batch_reads_what_a_query_per_ray_read(
-    seed: int, noise: float, monkeypatch: pytest.MonkeyPatch
+    seed: int, noise: float, far: str, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     monkeypatch.setattr(_world, "BATCH_FROM", 1)  # every tick batched, whatever the crowd
+    # the rays open past NEAR: each asked of chipmunk, or numpy over the discs in reach
+    monkeypatch.setattr(_sonar, "PAIRS_PER_QUERY", 0.0 if far == "queries" else math.inf)
     batched, slow = _scene(seed, noise), _scene(seed, noise)
     reference: dict[str, list[float]] = {}
 
