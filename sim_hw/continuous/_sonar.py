@@ -36,9 +36,10 @@ _ANGLE_SLACK = 1e-6
 """Radians added to a disc's angular width when choosing the rays to try on it."""
 NEAR = 1.0
 """Metres: the discs this near a sonar are tried first (in a crowd most rays end there)."""
-PAIRS_PER_QUERY = 6.0
-"""What a chipmunk query of a ray costs, in (sonar, disc) pairs of numpy's pass (1000 robots of
-``bench/sim.py``: a query 1.9-2.5 µs, a pair 0.25-0.7 µs; see :func:`_queries_cheaper`)."""
+PAIRS_PER_QUERY = 8.0
+"""What a chipmunk query of a ray costs, in candidate (sonar, disc) pairs of numpy's far pass
+(``bench/sim.py``'s 200 and 1000 robots, crowded and spread: a query 1.6-2.5 µs, a candidate
+0.13-0.31 µs; see :func:`_queries_cheaper`)."""
 
 
 def _trig_is_libm() -> bool:
@@ -218,10 +219,11 @@ def _queries_cheaper(
     discs: Discs, counts: np.ndarray, reach: np.ndarray, open_: np.ndarray
 ) -> bool:
     """Whether asking chipmunk for each open ray (:func:`_whole`) should cost less than numpy
-    over the discs within reach of their sonars (:func:`_discs_far`): in a crowd few rays stay
-    open and each sonar has many discs in reach, spread out most rays stay open past few. The
-    pairs are estimated from the discs' density over the box they fill; a query costs about
-    as much as PAIRS_PER_QUERY pairs (either way the readings are the same)."""
+    over the discs on the grid cells around their sonars (:func:`_discs_far`): in a crowd few
+    rays stay open and each sonar has many discs near, spread out most rays stay open past
+    few. The candidates (a sonar's 3 x 3 cells as wide as its reach) are estimated from the
+    discs' density over the box they fill; a query costs about as much as PAIRS_PER_QUERY
+    candidates (either way the readings are the same)."""
     rays = int(open_.sum())
     if not rays:
         return False
@@ -229,8 +231,8 @@ def _queries_cheaper(
     sonars = int(np.count_nonzero(np.add.reduceat(open_, first_ray)))
     far = float(reach.max() + discs.radius.max())
     area = (float(np.ptp(discs.x)) + 2 * far) * (float(np.ptp(discs.y)) + 2 * far)
-    pairs = sonars * len(discs.x) * math.pi * far * far / area
-    return pairs > PAIRS_PER_QUERY * rays
+    candidates = sonars * len(discs.x) * 9 * far * far / area
+    return candidates > PAIRS_PER_QUERY * rays
 
 
 def _discs_far(
