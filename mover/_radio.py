@@ -33,6 +33,7 @@ from . import _cells, _keys
 from ._bridge import sample_size
 from ._cells import CellSet, Undeclarable
 from ._exceptions import PayloadTooLarge, WireError
+from ._futures import running_loop
 from ._wire import SessionUnknown, broadcast_frames, pack, read_broadcast
 
 if TYPE_CHECKING:
@@ -139,7 +140,7 @@ class Subscription:
             while not self._items:
                 if self._closed:
                     raise StopAsyncIteration
-                self._waiter = asyncio.get_running_loop().create_future()
+                self._waiter = running_loop().create_future()
                 try:
                     await self._waiter
                 finally:
@@ -314,7 +315,7 @@ class PubSub:
         box.append(item)
         if not self._flush_scheduled:
             self._flush_scheduled = True
-            asyncio.get_running_loop().call_soon(self.flush)
+            running_loop().call_soon(self.flush)
 
     def _key(self, topic: str, reach: float | None, where: Any) -> str:
         """The key a broadcast goes under: its sender's cell, or the topic's team-wide key."""

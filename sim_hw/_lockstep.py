@@ -48,6 +48,8 @@ import logging
 from collections.abc import Callable, Mapping
 from typing import Any, Generic, TypeVar
 
+from mover._futures import running_loop
+
 from ._delayed import Delayed
 from ._schedules import Lockstep, RealTime, Schedule, Turns
 from ._types import Command, Readings, RobotDropped, Stepper, TurnStepper
@@ -289,7 +291,7 @@ class LockstepDoor(Generic[S]):
         """The future ``robot``'s caller waits on for its next readings (made if none)."""
         waiter = self._waiters.get(robot)
         if waiter is None:
-            waiter = self._waiters[robot] = asyncio.get_running_loop().create_future()
+            waiter = self._waiters[robot] = running_loop().create_future()
         return waiter
 
     def waiter_of(self, robot: str) -> asyncio.Future[Readings] | None:

@@ -11,7 +11,7 @@ import contextlib
 import math
 from collections.abc import AsyncIterator, Callable
 
-from mover._futures import failure, shielded
+from mover._futures import failure, running_loop, shielded
 from robots.hal import HardwareLost, LostLatch
 
 from ._link import DoorLink, WorldLink
@@ -117,7 +117,7 @@ class Ticks(LostLatch):
         tick = self._tick_of(self.readings)
         task: asyncio.Future[Readings]
         if self._door is None:
-            task = asyncio.get_running_loop().create_task(self._exchange(tick, command))
+            task = running_loop().create_task(self._exchange(tick, command))
             task.add_done_callback(failure)
         else:
             try:

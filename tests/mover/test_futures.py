@@ -7,7 +7,7 @@ import gc
 
 import pytest
 
-from mover._futures import shielded
+from mover._futures import running_loop, shielded
 
 
 async def test_the_caller_gets_the_result_the_exception_or_the_cancellation() -> None:
@@ -48,3 +48,17 @@ async def test_a_caller_that_gives_up_leaves_the_future_running_and_its_failure_
     del inner
     gc.collect()
     assert "never retrieved" not in caplog.text
+
+
+def test_running_loop_is_the_running_one_across_loops_and_refuses_outside() -> None:
+    seen = [asyncio.run(_loop_pair()) for _ in range(2)]
+    for cached, asked in seen:
+        assert cached is asked  # the loop that runs now, not the last one's
+    assert seen[0][0] is not seen[1][0]
+    with pytest.raises(RuntimeError):
+        running_loop()  # no loop runs: as asyncio.get_running_loop()
+
+
+async def _loop_pair() -> tuple[asyncio.AbstractEventLoop, asyncio.AbstractEventLoop]:
+    running_loop()
+    return running_loop(), asyncio.get_running_loop()
