@@ -220,6 +220,18 @@ class Floor:
         ij = self.index(x, y)
         return int(self.values[ij]), self.colours.get(ij, "")
 
+    def read_all(self, xs: np.ndarray, ys: np.ndarray) -> list[list[Any]]:
+        """``[value, colour]`` of the cell under each point: what :meth:`read` gives each, in
+        a few numpy passes."""
+        i = np.clip(np.floor(xs / self.cell), 0, self.shape[0] - 1).astype(np.intp)
+        j = np.clip(np.floor(ys / self.cell), 0, self.shape[1] - 1).astype(np.intp)
+        values = self.values[i, j].tolist()
+        if not self.colours:
+            return [[v, ""] for v in values]
+        get = self.colours.get
+        cells = zip(i.tolist(), j.tolist(), strict=True)
+        return [[v, get(ij, "")] for v, ij in zip(values, cells, strict=True)]
+
     def write(self, x: float, y: float, value: int, colour: str) -> None:
         """Set the cell under (x, y)."""
         self.set(*self.index(x, y), value, colour)

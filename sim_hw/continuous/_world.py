@@ -273,9 +273,10 @@ class World:
             np.array([r.group for r in robots]),
         )
         ranges = iter(sonar_batch(self.space, discs, sonars, self._others))
-        for robot, pose in zip(robots, poses, strict=True):
+        floors = self.floor.read_all(discs.x, discs.y)
+        for robot, pose, floor in zip(robots, poses, floors, strict=True):
             ranged = next(ranges) if robot.sonar else None
-            robot.readings = self._readings(robot, pose, ranged, normals)
+            robot.readings = self._readings(robot, pose, ranged, normals, floor)
 
     def _hear_marks(self, robots: list[_Robot]) -> None:
         """Markable markers take the ``mark:<id>`` LED messages of robots within ``hears``."""
@@ -321,7 +322,8 @@ class World:
             if sonar
             else None
         )
-        return self._readings(robot, pose, ranges, normals)
+        floor = list(self.floor.read(pose[0], pose[1]))
+        return self._readings(robot, pose, ranges, normals, floor)
 
     def _readings(
         self,
@@ -329,8 +331,10 @@ class World:
         pose: tuple[float, float, float],
         ranges: list[float] | None,
         normals: dict[int, list[tuple[float, float]]],
+        floor: list[Any],
     ) -> Readings:
         spec = robot.parts.spec
+        contacts = normals.get(robot.body_id)
         cam = spec.camera
         sightings = (
             _devices.camera_sightings(
@@ -349,13 +353,15 @@ class World:
             "tick": self.tick,
             "t": self.time,
             "sonar": ranges,
-            "bump": _devices.bumper_side(
-                normals.get(robot.body_id), _lib.cpBodyGetAngle(robot.parts.body._body)
+            "bump": (
+                _devices.bumper_side(contacts, _lib.cpBodyGetAngle(robot.parts.body._body))
+                if contacts
+                else None
             ),
             "odom": list(robot.odom),
             "cam": sightings,
             "loc": list(pose) if spec.radio else None,
-            "floor": list(self.floor.read(pose[0], pose[1])),
+            "floor": floor,
             "push": self._push_reading(robot),
         }
 

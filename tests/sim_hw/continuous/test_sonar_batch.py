@@ -135,3 +135,28 @@ def test_the_bumper_reads_what_each_robots_arbiters_read(
             sides[side] = sides.get(side, 0) + 1
     assert set(sides) == {None, "front", "left", "right", "back"}  # every side was read
     assert sum(v for k, v in sides.items() if k) > 500  # a crowd: many contacts
+
+
+def test_batched_readings_are_a_robot_at_a_time_readings(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Every field of every robot's readings, the floor under it included (cells written with
+    and without a colour), tick after tick: the batch against a robot at a time."""
+    runs = []
+    for batch_from in (1, 10**9):
+        monkeypatch.setattr(_world, "BATCH_FROM", batch_from)
+        world = _scene(5, 0.02)
+        rng = np.random.default_rng(5)
+        for i in range(world.floor.shape[0]):
+            world.floor.set(i, i % world.floor.shape[1], i, "red" if i % 2 else "")
+        readings = []
+        for tick in range(12):
+            for rid in sorted(world.robots):
+                command = {"v": float(rng.uniform(0, 0.5)), "w": float(rng.uniform(-3, 3))}
+                if tick % 3 == 0:
+                    command["floor"] = [tick, "blue" if tick % 2 else ""]
+                world.set_command(rid, command)
+            world.step()
+            readings.append({rid: r.readings for rid, r in world.robots.items()})
+        runs.append(readings)
+    assert runs[0] == runs[1]
+    floors = {tuple(r["floor"]) for tick in runs[0] for r in tick.values()}
+    assert {c for _, c in floors} == {"", "red", "blue"}  # every kind of cell was read
