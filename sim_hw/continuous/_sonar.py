@@ -268,10 +268,16 @@ def _whole(
     rows = np.flatnonzero(only)
     starts = zip(rays.ax[rows].tolist(), rays.ay[rows].tolist(), strict=True)
     ends = zip(rays.bx[rows].tolist(), rays.by[rows].tolist(), strict=True)
-    groups = [sonars[k].group for k in owner_s[rows].tolist()]
-    for i, start, end, group in zip(rows.tolist(), starts, ends, groups, strict=True):
-        hit = query(cspace, start, end, 0.0, (group, CAT_QUERY, SOLID), info) != null
-        alpha[i] = info.alpha if hit else 1.0
+    out = []
+    last, owner, shape_filter = -1, None, None
+    for k, start, end in zip(owner_s[rows].tolist(), starts, ends, strict=True):
+        if k != last:  # a sonar's rays are in a row: one filter struct for them
+            last = k
+            owner = _ffi.new("cpShapeFilter *", (sonars[k].group, CAT_QUERY, SOLID))
+            shape_filter = owner[0]  # (valid while ``owner`` lives)
+        hit = query(cspace, start, end, 0.0, shape_filter, info) != null
+        out.append(info.alpha if hit else 1.0)
+    alpha[rows] = out
 
 
 def _pass(
