@@ -104,6 +104,18 @@ class _Rays:
 
 
 @dataclass(slots=True)
+class _Sonars:
+    """The batch's sonars as arrays: each one's disc, ray count, first ray, angle between its
+    rays (see :class:`Sonar`) and farthest reach from its disc's centre."""
+
+    index: np.ndarray
+    counts: np.ndarray
+    first_ray: np.ndarray
+    spread: np.ndarray
+    far: np.ndarray
+
+
+@dataclass(slots=True)
 class Discs:
     """Every robot's disc now: centre, heading, radius and shape filter group."""
 
@@ -138,13 +150,14 @@ def sonar_batch(
     alpha = np.ones(len(owner))
     spread = np.fromiter((so.spread for so in sonars), float, len(sonars))
     rays = _Rays(owner, c, s, ax, ay, bx, by, far, reach)
-    open_ = _discs_near(alpha, discs, index, counts, spread, rays)
+    batch = _Sonars(index, counts, first_ray, spread, np.maximum.reduceat(far, first_ray))
+    open_ = _discs_near(alpha, discs, batch, rays)
     rest = np.ones(len(alpha), bool)  # the rays that may still meet a shape nearer
-    if _queries_cheaper(discs, counts, reach_s, open_):
+    if _queries_cheaper(discs, batch, reach_s, open_):
         _whole(alpha, space, sonars, owner_s, rays, open_)
         rest = ~open_
     elif open_.any():
-        _discs_far(alpha, discs, index, counts, spread, rays, open_)
+        _discs_far(alpha, discs, batch, rays, open_)
     _others_first(alpha, space, others, sonars, owner_s, rays, rest)
     hits = alpha < 1.0
     ranges = np.where(hits, alpha * reach, reach)  # no hit: the range itself
@@ -193,31 +206,20 @@ def _pairs(discs: Discs, index: np.ndarray, bound: np.ndarray) -> tuple[np.ndarr
     return k[keep], j[keep]
 
 
-def _discs_near(
-    alpha: np.ndarray,
-    discs: Discs,
-    index: np.ndarray,
-    counts: np.ndarray,
-    spread: np.ndarray,
-    rays: _Rays,
-) -> np.ndarray:
+def _discs_near(alpha: np.ndarray, discs: Discs, batch: _Sonars, rays: _Rays) -> np.ndarray:
     """Lower ``alpha`` to each ray's first hit on a robot's disc within NEAR of its sonar
     (chipmunk's circle query); return the rays still open: those whose sonar reaches past NEAR
     and that hit no disc that near (a disc farther than NEAR cannot be hit nearer than NEAR
     along a ray from the centre)."""
-    first_ray = np.cumsum(counts) - counts
-    far = np.maximum.reduceat(rays.far, first_ray)
-    near = np.minimum(far, NEAR)
-    _pass(alpha, discs, index, counts, spread, first_ray, near, rays)
+    near = np.minimum(batch.far, NEAR)
+    _pass(alpha, discs, batch.index, batch.counts, batch.spread, batch.first_ray, near, rays)
     reached = discs.radius[rays.owner] + alpha * rays.reach  # hit distance from the centre
     open_: np.ndarray = ~((alpha < 1.0) & (reached <= NEAR - _SLACK))
-    open_ &= np.repeat(far > NEAR, counts)
+    open_ &= np.repeat(batch.far > NEAR, batch.counts)
     return open_
 
 
-def _queries_cheaper(
-    discs: Discs, counts: np.ndarray, reach: np.ndarray, open_: np.ndarray
-) -> bool:
+def _queries_cheaper(discs: Discs, batch: _Sonars, reach: np.ndarray, open_: np.ndarray) -> bool:
     """Whether asking chipmunk for each open ray (:func:`_whole`) should cost less than numpy
     over the discs on the grid cells around their sonars (:func:`_discs_far`): in a crowd few
     rays stay open and each sonar has many discs near, spread out most rays stay open past
@@ -227,8 +229,7 @@ def _queries_cheaper(
     rays = int(open_.sum())
     if not rays:
         return False
-    first_ray = np.cumsum(counts) - counts
-    sonars = int(np.count_nonzero(np.add.reduceat(open_, first_ray)))
+    sonars = int(np.count_nonzero(np.add.reduceat(open_, batch.first_ray)))
     far = float(reach.max() + discs.radius.max())
     area = (float(np.ptp(discs.x)) + 2 * far) * (float(np.ptp(discs.y)) + 2 * far)
     candidates = sonars * len(discs.x) * 9 * far * far / area
@@ -236,20 +237,22 @@ def _queries_cheaper(
 
 
 def _discs_far(
-    alpha: np.ndarray,
-    discs: Discs,
-    index: np.ndarray,
-    counts: np.ndarray,
-    spread: np.ndarray,
-    rays: _Rays,
-    open_: np.ndarray,
+    alpha: np.ndarray, discs: Discs, batch: _Sonars, rays: _Rays, open_: np.ndarray
 ) -> None:
     """Lower ``alpha`` of the ``open_`` rays to their first hit on any disc within their
     sonar's reach."""
-    first_ray = np.cumsum(counts) - counts
-    far = np.maximum.reduceat(rays.far, first_ray)
-    sub = np.flatnonzero(np.add.reduceat(open_, first_ray) > 0)
-    _pass(alpha, discs, index[sub], counts[sub], spread[sub], first_ray[sub], far[sub], rays, open_)
+    sub = np.flatnonzero(np.add.reduceat(open_, batch.first_ray) > 0)
+    _pass(
+        alpha,
+        discs,
+        batch.index[sub],
+        batch.counts[sub],
+        batch.spread[sub],
+        batch.first_ray[sub],
+        batch.far[sub],
+        rays,
+        open_,
+    )
 
 
 def _whole(
