@@ -5,6 +5,7 @@ each robot's ``Body.each_arbiter`` read."""
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 import pymunk
@@ -150,7 +151,10 @@ def test_batched_readings_are_a_robot_at_a_time_readings(monkeypatch: pytest.Mon
         readings = []
         for tick in range(12):
             for rid in sorted(world.robots):
-                command = {"v": float(rng.uniform(0, 0.5)), "w": float(rng.uniform(-3, 3))}
+                command: dict[str, Any] = {
+                    "v": float(rng.uniform(0, 0.5)),
+                    "w": float(rng.uniform(-3, 3)),
+                }
                 if tick % 3 == 0:
                     command["floor"] = [tick, "blue" if tick % 2 else ""]
                 world.set_command(rid, command)
