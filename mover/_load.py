@@ -60,13 +60,19 @@ async def stutter(
             if not procs:
                 continue
             victim, pause = rng.choice(sorted(procs)), rng.uniform(0.05, longest)
-            with contextlib.suppress(ProcessLookupError):
+            try:
                 os.kill(victim, signal.SIGSTOP)
-                try:
-                    await asyncio.sleep(pause)
-                finally:
+            except ProcessLookupError:  # it ended meanwhile
+                continue
+            try:
+                await asyncio.sleep(pause)
+            finally:
+                # a victim that ended while stopped (its run killed it) is not resumed; and a
+                # cancellation here goes on (a suppressed error around the finally swallowed
+                # it, and the block's end waited for this loop forever)
+                with contextlib.suppress(ProcessLookupError):
                     os.kill(victim, signal.SIGCONT)
-                stops.append((victim, pause))
+            stops.append((victim, pause))
 
     task = asyncio.ensure_future(run())
     try:
