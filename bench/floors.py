@@ -34,7 +34,9 @@ import contextlib
 import json
 import math
 import os
+import signal
 import sys
+import threading
 import time
 from pathlib import Path
 from typing import Any
@@ -167,7 +169,7 @@ async def walker(endpoint: str, role: str, index: int) -> None:
 
     sub = session.declare_subscriber(FRAME_KEY, _into_loop(loop, on_frame))
     print("READY", flush=True)
-    await asyncio.wait_for(done, 300)
+    await asyncio.wait([done, _orphaned()], timeout=300, return_when=asyncio.FIRST_COMPLETED)
     sub.undeclare()
     session.close()
 
@@ -238,14 +240,39 @@ async def procs_floor(n: int, ticks: int) -> tuple[float, str]:
     return rtf, "router" if router else "peer"
 
 
+def _orphaned() -> asyncio.Future[None]:
+    """Done once this child's stdin closes: the benchmark that started it is gone (even
+    killed), and the child ends too."""
+    loop = asyncio.get_running_loop()
+    gone: asyncio.Future[None] = loop.create_future()
+
+    def end() -> None:
+        if not gone.done():
+            gone.set_result(None)
+
+    def read() -> None:
+        sys.stdin.buffer.read()
+        with contextlib.suppress(RuntimeError):  # (the loop closed: the child ends anyway)
+            loop.call_soon_threadsafe(end)
+
+    threading.Thread(target=read, daemon=True).start()  # (a daemon: no join at exit)
+    return gone
+
+
 async def _spawn(args: list[str]) -> asyncio.subprocess.Process:
     proc = await asyncio.create_subprocess_exec(
-        sys.executable, __file__, *args, stdout=asyncio.subprocess.PIPE, cwd=ROOT
-    )
+        sys.executable, __file__, *args, cwd=ROOT,
+        stdin=asyncio.subprocess.PIPE, stdout=asyncio.subprocess.PIPE,
+    )  # fmt: skip
     assert proc.stdout is not None
-    async with asyncio.timeout(60):
-        while not (await proc.stdout.readline()).startswith(b"READY"):
-            pass
+    try:
+        async with asyncio.timeout(60):
+            while not (await proc.stdout.readline()).startswith(b"READY"):
+                pass
+    except BaseException:  # not up (or the run was interrupted): it is ended here
+        proc.kill()
+        await proc.wait()
+        raise
     return proc
 
 
@@ -253,7 +280,7 @@ async def router(endpoint: str) -> None:
     session = _session(endpoint, "router")
     print("READY", flush=True)
     try:
-        await asyncio.Event().wait()
+        await _orphaned()
     finally:
         session.close()
 
@@ -287,9 +314,21 @@ async def rss_floor(aead: bool) -> float:
     return int(out.split()[-1]) / 1024
 
 
+PARTS = ("world", "procs", "rss")
+
+
+def _parts(text: str) -> set[str]:
+    """``--parts``: some of PARTS, comma-separated."""
+    parts = {p.strip() for p in text.split(",") if p.strip()}
+    unknown = sorted(parts - set(PARTS))
+    if unknown or not parts:
+        raise argparse.ArgumentTypeError(f"{text!r}: parts are some of {', '.join(PARTS)}")
+    return parts
+
+
 async def main(args: argparse.Namespace) -> dict[str, Any]:
     scale = 0.3 if args.quick else 1.0
-    parts = set(args.parts.split(","))
+    parts = args.parts
     out: dict[str, Any] = {}
     if "world" in parts:
         out.update(await world_floors([10, 50, 200, 1000], scale))
@@ -311,6 +350,7 @@ async def main(args: argparse.Namespace) -> dict[str, Any]:
 
 if __name__ == "__main__":
     if len(sys.argv) > 1 and sys.argv[1] in ("walker", "router", "rss"):
+        signal.signal(signal.SIGINT, signal.SIG_IGN)  # a Ctrl-C is the run's: it ends us
         what = sys.argv[1]
         if what == "walker":
             asyncio.run(walker(sys.argv[2], sys.argv[3], int(sys.argv[4])))
@@ -321,5 +361,10 @@ if __name__ == "__main__":
         sys.exit(0)
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="30 %% of the ticks")
-    parser.add_argument("--parts", default="world,procs,rss", help="of world, procs, rss")
-    print(json.dumps(asyncio.run(main(parser.parse_args()))))
+    parser.add_argument(
+        "--parts", type=_parts, default=set(PARTS), help="comma-separated, of world, procs, rss"
+    )
+    try:
+        print(json.dumps(asyncio.run(main(parser.parse_args()))))
+    except KeyboardInterrupt:  # (its processes are ended on the way out)
+        sys.exit("floors: interrupted")
