@@ -95,8 +95,11 @@ async def test_search_and_rescue_goes_through_a_partition_a_router_stall_and_los
 
 
 def hello(plan: TeamPlan) -> TeamPlan:
-    """The team of ``plan`` running hello_team (radio, calls, a collective; seconds long)."""
-    return replace(plan, program=ProgramPlan("hello_team", run="hello"))
+    """The team of ``plan`` running hello_team (radio, calls, a collective; seconds long),
+    listening 3 s for hellos: at 50 ± 20 ms each way and 2 % loss a hello crosses the link twice
+    (robot, router, robot), after the team's start crossed it, and each loss holds a chunk 200 ms,
+    then 400 ms more; half a second (its default) missed one in a CI run."""
+    return replace(plan, program=ProgramPlan("hello_team", args={"listen": 3.0}, run="hello"))
 
 
 @pytest.mark.timeout(240)

@@ -28,6 +28,10 @@ async def test_robot_and_workstation_run_a_program_together() -> None:
         sizes = {m: o["result"]["team_size"] for m, o in outcomes.items()}
         assert sizes == {"desk": 3, "ernst": 3, "moseley": 3}
         assert outcomes["ernst"]["result"]["me"]["nearest"] == "moseley"
+        bad = await launch(node, "hello_team", ["ernst", "moseley"], {"listen": -1}, run="bad")
+        assert {m: o.get("error") for m, o in bad.items()} == dict.fromkeys(
+            ["ernst", "moseley"], "ValueError: listen is -1.0 s; from 0 to 60.0 s"
+        )
 
 
 async def robot_process(*args: str) -> tuple[int, str]:
