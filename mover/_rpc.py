@@ -62,6 +62,9 @@ ANSWERS_BYTES = 4 * 1024 * 1024
 """Bytes of answers kept at most per half (one larger answer is kept alone)."""
 WAITING = 8
 """Copies of one running call held at most until its answer (the rest: an unsigned refusal)."""
+ASK_AGAIN = (0.2, 2.0)
+"""Seconds a caller waits before it sends its call again, the same frame, after a query to a
+member ended with no answer it believes: the first time, and at most (doubling between)."""
 _GONE = object()
 
 
@@ -390,7 +393,9 @@ class _Pending:
     procedure: str
     future: asyncio.Future[Any]
     was_member: bool
+    ask: Callable[[], None]  # sends the call's sealed frame (again)
     refusal: str | None = None
+    asked: int = 1  # how often the frame was sent
 
 
 class RpcClient:
@@ -455,19 +460,24 @@ class RpcClient:
         call_id = self._next_id
         payload = [procedure, list(args), kwargs]
         frame = state.sealer.seal("call", payload, call_id, to=robot, to_epoch=epoch)
-        future: asyncio.Future[Any] = asyncio.get_running_loop().create_future()
-        member = robot in self.team
-        self.pending[call_id] = _Pending(robot, procedure, future, member)
-        try:
+        loop = asyncio.get_running_loop()
+        future: asyncio.Future[Any] = loop.create_future()
+        end = None if left is None else loop.time() + left
+
+        def ask() -> None:
             # Only the member's authentic reply counts (see _on_reply).
             state.ask_all(
                 _keys.rpc(state.team, robot),
                 frame,
                 partial(self._on_reply, call_id),
                 partial(self._on_done, call_id),
-                timeout=(left + 1.0) if left is not None else _NO_TIMEOUT,
+                timeout=_NO_TIMEOUT if end is None else max(0.0, end - loop.time()) + 1.0,
                 express=True,
             )
+
+        self.pending[call_id] = _Pending(robot, procedure, future, robot in self.team, ask)
+        try:
+            ask()
             state.stats["sent.call"] += 1
             try:
                 async with asyncio.timeout(left):
@@ -551,7 +561,13 @@ class RpcClient:
             return
         if p.was_member:
             # The query ended with no authentic answer (no route for now, or only a stranger
-            # answered): the member's liveliness, or the caller's timeout, decides.
+            # answered: the callee refused our frame while copies of it that came first held
+            # every place for a running call): ask again, the same frame, until an answer, the
+            # member's leaving or the caller's timeout. The callee runs a call once and answers
+            # every copy of it with the sealed answer it keeps.
+            first, most = ASK_AGAIN
+            wait = min(most, first * 2 ** (p.asked - 1))
+            asyncio.get_running_loop().call_later(wait, self._ask_again, call_id)
             return
         if p.refusal is not None:
             exc: CallError = Refused(
@@ -568,6 +584,14 @@ class RpcClient:
                 procedure=p.procedure,
             )
         p.future.set_exception(exc)
+
+    def _ask_again(self, call_id: int) -> None:
+        p = self.pending.get(call_id)
+        if p is None or p.future.done() or not self.state.is_open:
+            return
+        p.asked += 1
+        p.ask()
+        self.state.stats["sent.call_again"] += 1
 
     def robot_left(self, robot: str) -> None:
         for p in self.pending.values():

@@ -16,7 +16,8 @@ at once (to reach the callee before the original, it must have the faster path: 
 gives it one), and answers nothing, dropping whatever the callee answers its copy. A callee
 that ran the copy and then refused the original as a replay would leave the real call without
 an answer. ``<answers>`` then counts sealed answers to its copies (the callee ran the copy
-first) and ``<refusals>`` unsigned refusals (the original came first).
+first) and ``<refusals>`` unsigned refusals (the original came first). ``--copies N`` sends N
+copies of each call (more than a callee holds for one running call crowd the original out).
 
 It prints ``READY`` once declared and ``DONE <queries> <answers> <puts> <refusals>`` when it
 stops (after ``--seconds``, or at SIGTERM).
@@ -40,6 +41,7 @@ def main() -> None:
     p.add_argument("team")
     p.add_argument("--seconds", type=float, default=10.0)
     p.add_argument("--first", action="store_true", help="copy each call first, drop answers")
+    p.add_argument("--copies", type=int, default=1, help="with --first: copies of each call")
     args = p.parse_args()
     session = zenoh.open(NodeConfig.from_env().to_zenoh())
     pool = ThreadPoolExecutor(32)  # a long call must not hold the others up
@@ -78,15 +80,16 @@ def main() -> None:
 
     def first(query: Any) -> None:
         frame = bytes(query.payload.to_bytes()) if query.payload is not None else b""
-        session.get(  # at once, from zenoh's thread: no hop through a pool
-            str(query.key_expr),
-            payload=frame,
-            target=zenoh.QueryTarget.ALL,
-            consolidation=zenoh.ConsolidationMode.NONE,
-            allowed_destination=zenoh.Locality.REMOTE,
-            timeout=30.0,
-            handler=on_answer,
-        )
+        for _ in range(args.copies):  # at once, from zenoh's thread: no hop through a pool
+            session.get(
+                str(query.key_expr),
+                payload=frame,
+                target=zenoh.QueryTarget.ALL,
+                consolidation=zenoh.ConsolidationMode.NONE,
+                allowed_destination=zenoh.Locality.REMOTE,
+                timeout=30.0,
+                handler=on_answer,
+            )
         with lock:
             counts["queries"] += 1
         query.drop()  # the caller's query ends with no answer from here

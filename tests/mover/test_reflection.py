@@ -9,11 +9,13 @@ from __future__ import annotations
 import asyncio
 import signal
 from pathlib import Path
+from typing import Any
 
 import pytest
 
 from mover import Node, NodeConfig, launch
 from mover._impair import Impairment, ImpairProxy
+from mover._rpc import WAITING
 from tests.helpers.procs import cluster
 from tests.mover.test_collectives_processes import start_team
 
@@ -53,10 +55,10 @@ async def test_an_outsider_reflecting_every_frame_fails_no_call_and_no_run(
     assert queries >= 200 and answers > 0, said  # the attack happened
 
 
-@pytest.mark.timeout(120)
-async def test_a_copy_of_a_call_that_comes_first_with_its_answer_dropped_fails_no_call() -> None:
-    """The callee runs the copy (never twice) and answers the late original with the same
-    sealed answer; with a replay refused instead, every call here ended in CallTimeout."""
+async def copied_first(copies: int) -> tuple[list[str], list[str], Any]:
+    """100 calls to r1 (10 short and 10 long at once, five times) over a link 0.1 s slower each
+    way than the outsider's, which sends ``copies`` copies of each call on at once and drops the
+    answers: the calls that failed, what the outsider said, how often r1 bumped (50 asked)."""
     async with cluster() as c, Node("tester", c.team, kind="tool", config=c.seed) as node:
         proxy = ImpairProxy(("127.0.0.1", c.port), up=Impairment(SLOW), down=Impairment(SLOW))
         host, port = await proxy.start()
@@ -65,7 +67,8 @@ async def test_a_copy_of_a_call_that_comes_first_with_its_answer_dropped_fails_n
             await c.start("tests.helpers.robot_proc", "--name", "r1", config=slow)
             await node.membership.wait_for({"r1"}, timeout=10)
             reflector = await c.start(
-                "tests.helpers.reflector", c.team.name, "--seconds", "60", "--first"
+                "tests.helpers.reflector",
+                *(c.team.name, "--seconds", "60", "--first", "--copies", str(copies)),
             )
             await asyncio.sleep(1.0)  # it links to r1 directly, and its queryable is known
             failed: list[str] = []
@@ -77,12 +80,19 @@ async def test_a_copy_of_a_call_that_comes_first_with_its_answer_dropped_fails_n
             asked = await asyncio.gather(
                 node.call("r1", "bumps", timeout=5), return_exceptions=True
             )
-            bumps = asked[0]
             c.kill(reflector, signal.SIGTERM)
             assert reflector.stdout is not None
             said = (await asyncio.wait_for(reflector.stdout.read(), 10)).decode().split()
         finally:
             await proxy.close()
+    return failed, said, asked[0]
+
+
+@pytest.mark.timeout(120)
+async def test_a_copy_of_a_call_that_comes_first_with_its_answer_dropped_fails_no_call() -> None:
+    """The callee runs the copy (never twice) and answers the late original with the same
+    sealed answer; with a replay refused instead, every call here ended in CallTimeout."""
+    failed, said, bumps = await copied_first(1)
     copies, first, _, late = (int(x) for x in said[1:5]) if said[:1] == ["DONE"] else (0,) * 4
     print(
         f"{len(failed)} of 100 calls failed; the outsider sent {copies} copies: the callee ran "
@@ -91,3 +101,20 @@ async def test_a_copy_of_a_call_that_comes_first_with_its_answer_dropped_fails_n
     assert first >= 50, said  # the attack happened: most copies came first
     assert not failed, failed[:3]
     assert bumps == 50, bumps  # every bump ran once, its copy and the original together
+
+
+@pytest.mark.timeout(120)
+async def test_more_copies_of_a_running_call_than_are_held_fail_no_call() -> None:
+    """12 copies of each call come first: a callee holds 8 for a running call (``WAITING``) and
+    refuses the rest, the original among them. Its caller asks again, with the same frame,
+    once the query ended with no answer it believes; the copy it sends is answered (with the
+    sealed answer kept) once the call is done. Before, each long call ended in CallTimeout."""
+    failed, said, bumps = await copied_first(WAITING + 4)
+    queries, first, _, refused = (int(x) for x in said[1:5]) if said[:1] == ["DONE"] else (0,) * 4
+    print(
+        f"{len(failed)} of 100 calls failed; the outsider copied {queries} calls "
+        f"{WAITING + 4} times: {first} copies answered, {refused} refused; r1 bumped {bumps} times"
+    )
+    assert refused >= 50, said  # the attack happened: copies of the long calls were refused
+    assert not failed, failed[:3]
+    assert bumps == 50, bumps
