@@ -64,7 +64,8 @@ WAITING = 8
 """Copies of one running call held at most until its answer (the rest: an unsigned refusal)."""
 ASK_AGAIN = (0.2, 2.0)
 """Seconds a caller waits before it sends its call again, the same frame, after a query to a
-member ended with no answer it believes: the first time, and at most (doubling between)."""
+member ended refused (unsigned) and with no answer it believes: the first time, and at most
+(doubling between)."""
 _GONE = object()
 
 
@@ -395,6 +396,7 @@ class _Pending:
     was_member: bool
     ask: Callable[[], None]  # sends the call's sealed frame (again)
     refusal: str | None = None
+    refused: bool = False  # an unsigned refusal came to the query now open
     asked: int = 1  # how often the frame was sent
 
 
@@ -522,7 +524,7 @@ class RpcClient:
         if reason is not None:
             # Unsigned: anyone could have sent it. It counts only if nothing authentic comes
             # before the query ends (_on_done): a caller whose key the callee refused hears why.
-            p.refusal = reason
+            p.refusal, p.refused = reason, True
             state.stats["recv.refusal"] += 1
             return
         try:
@@ -561,13 +563,15 @@ class RpcClient:
             return
         if p.was_member:
             # The query ended with no authentic answer (no route for now, or only a stranger
-            # answered: the callee refused our frame while copies of it that came first held
-            # every place for a running call): ask again, the same frame, until an answer, the
-            # member's leaving or the caller's timeout. The callee runs a call once and answers
-            # every copy of it with the sealed answer it keeps.
-            first, most = ASK_AGAIN
-            wait = min(most, first * 2 ** (p.asked - 1))
-            asyncio.get_running_loop().call_later(wait, self._ask_again, call_id)
+            # answered): the member's liveliness, or the caller's timeout, decides. If it was
+            # refused, unsigned (copies of our frame that came first took every place the
+            # callee holds for a running call), ask again, the same frame: the callee runs a
+            # call once and answers each copy of it with the sealed answer it keeps.
+            if p.refused:
+                p.refused = False
+                first, most = ASK_AGAIN
+                wait = min(most, first * 2 ** (p.asked - 1))
+                asyncio.get_running_loop().call_later(wait, self._ask_again, call_id)
             return
         if p.refusal is not None:
             exc: CallError = Refused(
