@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import faulthandler
 import logging
 import signal
 import sys
@@ -128,6 +129,7 @@ if __name__ == "__main__":
     # inherit SIGINT ignored (then a SIGINT case would test nothing, and time out).
     signal.signal(signal.SIGINT, signal.default_int_handler)
     interrupt_on_sigterm()  # as the robot processes do
+    faulthandler.register(signal.SIGUSR1, all_threads=True)  # a test's look at a hung member
     try:
         asyncio.run(serve_programs(name, PROGRAMS, timeout=20))
     except Terminated:

@@ -113,6 +113,23 @@ CASES = [
 # adopts a decision a live member holds (tests/mover/test_step_takeover.py, issue 22).
 
 
+async def gone(t: Team, victim: str) -> None:
+    """Wait (10 s at most) for the signalled ``victim`` to leave, and start it again. One that
+    does not leave has its threads' stacks written to its standard error (SIGUSR1, the
+    helper's faulthandler), is killed and started again (the next case meets a whole team),
+    and fails the case."""
+    try:
+        await t.node.membership.wait_gone(victim, timeout=10)
+    except TimeoutError:
+        t.c.kill(t.procs[victim], signal.SIGUSR1)
+        await asyncio.sleep(1.0)
+        t.c.kill(t.procs[victim])
+        await t.node.membership.wait_gone(victim, timeout=10)
+        await t.restart(victim)
+        raise AssertionError(f"{victim} did not leave within 10 s of its signal") from None
+    await t.restart(victim)
+
+
 def case_id(kind: str, phase: str, victim: str, sig: int, hold: float) -> str:
     late = "-late" if hold != HOLD else ""
     return f"{kind}-{phase}-{victim}-{signal.Signals(sig).name}{late}"
@@ -132,8 +149,7 @@ async def test_a_member_killed_at_a_phase_boundary_ends_the_step_for_all(
     try:
         ends = await ended(team.node, run, others, ENDS_WITHIN + 5)
     finally:
-        await team.node.membership.wait_gone(victim, timeout=10)
-        await team.restart(victim)
+        await gone(team, victim)
     for member, (outcome, at) in ends.items():
         print(f"{run}: {member} ended after {at - signalled:.2f} s: {outcome}")
         assert "MemberLost" in outcome.get("error", ""), (member, outcome)
